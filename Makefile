@@ -1,0 +1,40 @@
+# Two commands do all the set-up on a fresh Debian machine:
+#   make demo   - a real remap with its report and images (out/gold)
+#   make test   - the test suite
+# Both create .venv and install what they need; `system-deps` adds libLLVM 19 so Mitsuba
+# can use its fast llvm_ad_rgb variant (without it the tool falls back to scalar_rgb).
+
+PYTHON ?= python3.11
+VENV   ?= .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed-stamp
+LLVM19 := /usr/lib/x86_64-linux-gnu/libLLVM.so.19.1
+
+.PHONY: demo test test-all system-deps clean
+
+$(STAMP): pyproject.toml
+	@command -v $(PYTHON) >/dev/null || { echo "needs $(PYTHON) (the bpy wheels are built for Python 3.11)"; exit 1; }
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[all]'
+	@touch $(STAMP)
+
+system-deps:
+	@if [ "$$(uname -s)" = Linux ] && [ ! -e $(LLVM19) ] && command -v apt-get >/dev/null; then \
+	  if [ "$$(id -u)" = 0 ]; then SUDO=; else SUDO=sudo; fi; \
+	  echo "installing libllvm19 (Mitsuba's llvm variant)"; \
+	  $$SUDO apt-get update -qq && $$SUDO apt-get install -y -qq libllvm19 >/dev/null; \
+	fi
+
+demo: system-deps $(STAMP)
+	$(VENV)/bin/remap --adapter mitsuba --model roughconductor --fix distribution=ggx \
+	    --source configs/materials/gold.yaml --out out/gold
+
+test: system-deps $(STAMP)
+	$(PY) -m pytest
+
+test-all: system-deps $(STAMP)
+	$(PY) -m pytest --run-slow
+
+clean:
+	rm -rf out .pytest_cache

@@ -1,0 +1,87 @@
+"""Mitsuba 3 material models as data (no mitsuba import here)."""
+
+from __future__ import annotations
+
+from brdfremap.core.schemas import LobeSpec, ModelSpec, ParamSpec
+
+# Mitsuba 3's complex IOR database (names accepted by `material=` of conductors).
+CONDUCTOR_PRESETS = (
+    "none", "a-C", "Ag", "Al", "AlAs", "AlAs_palik", "AlSb", "AlSb_palik", "Au", "Be", "Cr", "CsI", "Cu",
+    "Cu_palik", "Cu2O", "CuO", "d-C", "Hg", "HgTe", "Ir", "K", "Li", "MgO", "Mo", "Na_palik", "Nb", "Ni_palik",
+    "Rh", "Se", "SiC", "SnTe", "Ta", "Te", "ThF4", "TiC", "TiN", "TiO2", "VC", "V_palik", "VN", "W",
+)
+DISTRIBUTION = ParamSpec(name="distribution", kind="choice", default="beckmann", choices=("beckmann", "ggx"),
+                         description="Microfacet distribution.")
+ALPHA = ParamSpec(name="alpha", kind="scalar", lower=0.002, upper=1.0, default=0.1, scale="log",
+                  description="Microfacet roughness α (Mitsuba's convention, not Blender's √α).")
+SPEC_REFL = ParamSpec(name="specular_reflectance", kind="rgb", default=(1.0, 1.0, 1.0), fit=False,
+                      description="Multiplier on the specular term (physically 1).")
+
+ROUGHCONDUCTOR = ModelSpec(
+    name="roughconductor",
+    description="Rough metal: microfacet conductor with Fresnel from a named IOR preset or eta/k.",
+    parameters=(
+        DISTRIBUTION,
+        ParamSpec(name="material", kind="choice", default="none", choices=CONDUCTOR_PRESETS,
+                  description="Named conductor from Mitsuba's IOR database; 'none' uses eta and k."),
+        ParamSpec(name="eta", kind="rgb", lower=0.0, upper=8.0, default=(1.0, 1.0, 1.0),
+                  active_when={"material": ("none",)}, description="Real part of the complex IOR (RGB)."),
+        ParamSpec(name="k", kind="rgb", lower=0.0, upper=10.0, default=(3.0, 3.0, 3.0),
+                  active_when={"material": ("none",)}, description="Imaginary part of the complex IOR (RGB)."),
+        ALPHA,
+        SPEC_REFL,
+    ),
+    lobes={
+        "diffuse": LobeSpec(empty=True),
+        "specular": LobeSpec(params=("alpha", "eta", "k", "specular_reflectance")),
+    },
+)
+
+ROUGHPLASTIC = ModelSpec(
+    name="roughplastic",
+    description="Diffuse base under a rough dielectric coating (Mitsuba's roughplastic).",
+    parameters=(
+        DISTRIBUTION,
+        ParamSpec(name="diffuse_reflectance", kind="rgb", default=(0.5, 0.5, 0.5), description="Base colour."),
+        ALPHA,
+        ParamSpec(name="int_ior", kind="scalar", lower=1.01, upper=3.0, default=1.49,
+                  description="Interior index of refraction of the coating (exterior: air)."),
+        SPEC_REFL,
+    ),
+    lobes={
+        "diffuse": LobeSpec(params=("diffuse_reflectance",), overrides={"specular_reflectance": (0.0, 0.0, 0.0)}),
+        "specular": LobeSpec(params=("alpha", "int_ior", "specular_reflectance"),
+                             overrides={"diffuse_reflectance": (0.0, 0.0, 0.0)}),
+    },
+)
+
+DIFFUSE = ModelSpec(
+    name="diffuse",
+    description="Lambertian reflector.",
+    parameters=(ParamSpec(name="reflectance", kind="rgb", default=(0.5, 0.5, 0.5), description="Albedo."),),
+    lobes={"diffuse": LobeSpec(params=("reflectance",)), "specular": LobeSpec(empty=True)},
+)
+
+
+def _unit(name, default, fit=True, desc=""):
+    return ParamSpec(name=name, kind="scalar", default=default, fit=fit, description=desc)
+
+
+PRINCIPLED = ModelSpec(
+    name="principled",
+    description="Disney principled BSDF (Mitsuba 3's `principled`); lobes are not separable by parameters.",
+    parameters=(
+        ParamSpec(name="base_color", kind="rgb", default=(0.5, 0.5, 0.5), description="Base colour."),
+        _unit("metallic", 0.0, desc="Metalness."),
+        _unit("roughness", 0.5, desc="Roughness (α = roughness²)."),
+        _unit("specular", 0.5, desc="Dielectric specular amount (0.5 ≈ IOR 1.5)."),
+        _unit("spec_tint", 0.0, fit=False, desc="Tint of the dielectric specular towards the base colour."),
+        _unit("anisotropic", 0.0, fit=False, desc="Anisotropy."),
+        _unit("sheen", 0.0, fit=False, desc="Sheen amount."),
+        _unit("sheen_tint", 0.0, fit=False, desc="Sheen tint."),
+        _unit("clearcoat", 0.0, fit=False, desc="Clear-coat amount."),
+        _unit("clearcoat_gloss", 0.0, fit=False, desc="Clear-coat glossiness."),
+    ),
+)
+
+MODELS = {m.name: m for m in (ROUGHCONDUCTOR, ROUGHPLASTIC, DIFFUSE, PRINCIPLED)}

@@ -1,0 +1,200 @@
+"""The `remap` command. Bad input prints one line naming the file and field, and exits 2."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+from .errors import ConfigError, RemapError
+
+EXIT_USAGE = 2
+
+USAGE_EPILOG = """\
+other commands:
+  remap adapters            list adapters, their models, and why one is unavailable
+
+examples:
+  remap --adapter mitsuba --model roughconductor --fix distribution=ggx \\
+        --source configs/materials/gold.yaml --out out/gold-ggx
+"""
+
+
+def _remap_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="remap",
+        description="Remap a material to another renderer's BRDF model by matching rendered images "
+        "(Sztrajman et al., MAM 2017).",
+        epilog=USAGE_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("--adapter", required=True, help="target adapter (see `remap adapters`)")
+    p.add_argument("--model", required=True, help="target material model of that adapter")
+    p.add_argument("--source", required=True, metavar="MATERIAL.yaml", help="source material file")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    p.add_argument("--scene", metavar="SCENE.yaml", help="probe scene (default: the built-in probe, "
+                   "identical to configs/scenes/default.yaml)")
+    p.add_argument("--scheme", choices=("one", "two", "three"), default="two", help="remap scheme (default: two)")
+    p.add_argument("--resolution", type=int, help="override the scene's resolution (pixels)")
+    p.add_argument("--spp", type=int, help="override the scene's samples per pixel")
+    p.add_argument("--seed", type=int, help="override the scene's sampler seed")
+    p.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE",
+                   help="hold a target parameter at a value (repeatable), e.g. --fix distribution=ggx")
+    p.add_argument("--starts", type=int, default=4, help="initial points tried per stage (default 4)")
+    p.add_argument("--threshold", type=float, default=0.05,
+                   help="relative RMSE above which a result is flagged unreliable (default 0.05)")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.add_argument("--debug", action="store_true", help="show tracebacks")
+    return p
+
+
+def _adapters_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="remap adapters", description="List adapters and their models.")
+    p.add_argument("--debug", action="store_true", help="show tracebacks")
+    return p
+
+
+class Progress:
+    """Stage, renders so far and current error, on stderr; throttled when not a terminal."""
+
+    def __init__(self, enabled: bool):
+        self.enabled = enabled
+        self.tty = sys.stderr.isatty()
+        self.stage = None
+        self.last = 0.0
+        self.t0 = time.perf_counter()
+
+    def __call__(self, stage: str, renders: int, error: float) -> None:
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        err = "" if math.isnan(error) else f"  error {error:7.3%}"
+        line = f"  [{now - self.t0:6.1f}s] {stage:<9} renders {renders:4d}{err}"
+        if self.tty:
+            end = "\n" if stage != self.stage and self.stage is not None else ""
+            sys.stderr.write(("\n" if end else "\r") + line)
+            if stage == "final":
+                sys.stderr.write("\n")
+            sys.stderr.flush()
+        elif stage != self.stage or now - self.last > 2.0 or stage == "final":
+            print(line, file=sys.stderr, flush=True)
+            self.last = now
+        self.stage = stage
+
+
+def _fmt_params(params: dict, names: list[str] | None = None) -> str:
+    from .schemas import format_value
+
+    return " ".join(f"{k}={format_value(v)}" for k, v in params.items() if names is None or k in names)
+
+
+def cmd_remap(args: argparse.Namespace) -> int:
+    from .plugins import collect_adapters
+    from .remap import RemapOptions
+    from .scene import ProbeScene, load_scene
+    from .schemas import load_material, parse_fix
+    from .session import open_adapters, prepare, run, write_outputs
+
+    if args.starts < 1:
+        raise ConfigError("must be at least 1", field="--starts")
+    if not 0 < args.threshold < 10:
+        raise ConfigError("must be a positive fraction such as 0.05", field="--threshold")
+    source = load_material(args.source)
+    scene = load_scene(args.scene) if args.scene else ProbeScene()
+    try:
+        scene = ProbeScene.model_validate({**scene.model_dump(), **{
+            k: v for k, v in (("resolution", args.resolution), ("spp", args.spp), ("seed", args.seed)) if v is not None}})
+    except Exception as exc:
+        from pydantic import ValidationError
+
+        from .configio import validation_message
+
+        if isinstance(exc, ValidationError):
+            field, msg = validation_message(exc)
+            raise ConfigError(msg, field=f"--{field}") from exc
+        raise
+    registry = collect_adapters()
+    entry = registry.get(args.adapter)
+    if args.model not in entry.models:
+        raise ConfigError(f"adapter {args.adapter!r} has no model {args.model!r} (models: "
+                          f"{', '.join(sorted(entry.models))})", field="--model")
+    spec = entry.models[args.model]
+    fixed = dict(parse_fix(f, spec) for f in args.fix)
+    options = RemapOptions(scheme=args.scheme, starts=args.starts, threshold=args.threshold)
+    job = prepare(registry, source, str(args.source), args.adapter, args.model, scene, fixed, options)
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ConfigError("exists and is not a folder", field=f"--out {out}")
+    progress = Progress(not args.quiet)
+    if not args.quiet:
+        print(f"remap {source.adapter}:{source.model} -> {args.adapter}:{args.model}  "
+              f"({scene.resolution}x{scene.resolution}, {scene.spp} spp, scheme {args.scheme}; "
+              f"fitting {', '.join(job.free) or 'nothing'})", file=sys.stderr, flush=True)
+    with open_adapters(registry, [source.adapter, args.adapter]) as adapters:
+        outcome = run(job, registry, adapters, progress)
+        files = write_outputs(outcome, out, adapters[args.adapter])
+    r = outcome.result
+    rows = [
+        ("params", _fmt_params(r.params, [p.name for p in spec.parameters if spec.is_active(p.name, r.params)])),
+        ("relative RMSE", f"{r.relative_rmse:.2%}   (noise floor {outcome.noise_floor:.2%})"),
+        ("perceptual", f"{r.perceptual:.2f} mean ΔE_ITP"),
+        ("renders", f"{r.renders} target + {outcome.source_renders} source"),
+        ("seconds", f"{r.seconds:.2f}"),
+        ("scheme", r.scheme if r.scheme == r.scheme_used else f"{r.scheme} (used {r.scheme_used})"),
+        ("reliable", ("yes" if r.reliable else "NO") + ("" if r.reliable else f": {r.reason}")),
+        ("wrote", f"{out}/ ({', '.join(p.name for p in files)})"),
+    ]
+    width = max(len(k) for k, _ in rows)
+    for k, v in rows:
+        print(f"{k:<{width}}  {v}")
+    return 0
+
+
+def cmd_adapters(args: argparse.Namespace) -> int:
+    from .plugins import collect_adapters
+
+    registry = collect_adapters()
+    for name in registry.names():
+        entry = registry.get(name)
+        reason = entry.unavailable_reason()
+        print(f"{name}  [{entry.plugin}]  {getattr(entry.factory, 'summary', '')}")
+        if reason:
+            hint = getattr(entry.factory, "install_hint", "")
+            print(f"  unavailable: {reason}" + (f"\n  install: {hint}" if hint else ""))
+        else:
+            try:
+                env = entry.factory.environment()
+            except Exception as exc:
+                env = {"environment": f"unknown ({exc})"}
+            for k, v in env.items():
+                print(f"  {k}: {v}")
+        for mname, spec in sorted(entry.models.items()):
+            params = ", ".join(p.name for p in spec.parameters)
+            lobes = "lobes" if spec.has_lobes else "no lobe isolation"
+            print(f"  model {mname}: {params}  ({lobes})")
+    for plugin, err in sorted(registry.broken.items()):
+        print(f"broken plugin {plugin}: {err}")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv
+    try:
+        if argv and argv[0] == "adapters":
+            return cmd_adapters(_adapters_parser().parse_args(argv[1:]))
+        return cmd_remap(_remap_parser().parse_args(argv))
+    except RemapError as exc:
+        if debug:
+            raise
+        print(f"remap: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("remap: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

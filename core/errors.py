@@ -1,0 +1,29 @@
+"""The errors a user reads. The CLI prints ``str(error)`` on one line and exits 2."""
+
+from __future__ import annotations
+
+
+class RemapError(Exception):
+    """Base class: everything the tool reports to the user instead of a traceback."""
+
+
+class ConfigError(RemapError):
+    """Bad input: a file, a field or a parameter. The message names where and how to fix it."""
+
+    def __init__(self, message: str, *, file: str | None = None, field: str | None = None):
+        self.file = file
+        self.field = field
+        where = ": ".join(part for part in (file, field) if part)
+        super().__init__(f"{where}: {message}" if where else message)
+
+
+class AdapterUnavailableError(RemapError):
+    """An adapter is known but cannot run here (a missing package, a broken install)."""
+
+
+class RenderError(RemapError):
+    """A renderer failed to produce an image, or produced an invalid one."""
+
+
+class OptimisationError(RemapError):
+    """The fit could not run (for example, residuals not finite at the start)."""

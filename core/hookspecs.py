@@ -1,0 +1,20 @@
+"""Hook specifications of the brdfremap plugin host."""
+
+from __future__ import annotations
+
+import pluggy
+
+hookspec = pluggy.HookspecMarker("brdfremap")
+hookimpl = pluggy.HookimplMarker("brdfremap")
+
+
+@hookspec
+def brdfremap_register_adapters(register):
+    """Register renderer adapters.
+
+    Call ``register(name, factory)`` once per adapter. ``factory`` is an ``Adapter`` subclass
+    (or any callable with the same class attributes: ``models``, ``summary``,
+    ``install_hint``, ``unavailable_reason()``). Register the class, not an instance, and do
+    not import the renderer at module level: the host constructs the adapter only when a
+    user chooses it, so ``remap --help`` and ``remap adapters`` stay fast.
+    """

@@ -1,0 +1,69 @@
+"""Image error metrics over linear RGB images (H x W x 3)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+_709_TO_2020 = np.array(
+    [[0.6274040, 0.3292820, 0.0433136], [0.0690970, 0.9195400, 0.0113612], [0.0163916, 0.0880132, 0.8955950]]
+)
+_2020_TO_LMS = np.array([[1688, 2146, 262], [683, 2951, 462], [99, 309, 3688]]) / 4096.0
+_LMS_TO_ITP = np.array([[0.5, 0.5, 0.0], [6610, -13613, 7003], [17933, -17390, -543]]) / np.array([[1], [4096], [4096]])
+_LUMA = np.array([0.2126, 0.7152, 0.0722])
+REFERENCE_WHITE_NITS = 100.0
+
+
+def relative_rmse(reference: np.ndarray, test: np.ndarray) -> float:
+    """The paper's L2 metric: ||test - reference|| / ||reference|| over all pixels and channels."""
+    ref = np.asarray(reference, dtype=np.float64)
+    diff = np.asarray(test, dtype=np.float64) - ref
+    norm = float(np.linalg.norm(ref))
+    if norm == 0.0:
+        return float(np.linalg.norm(diff))
+    return float(np.linalg.norm(diff) / norm)
+
+
+def _pq(y: np.ndarray) -> np.ndarray:
+    m1, m2 = 2610 / 16384, 2523 / 4096 * 128
+    c1, c2, c3 = 3424 / 4096, 2413 / 4096 * 32, 2392 / 4096 * 32
+    yp = np.power(np.clip(y, 0.0, 1.0), m1)
+    return np.power((c1 + c2 * yp) / (1 + c3 * yp), m2)
+
+
+def _itp(rgb709_nits: np.ndarray) -> np.ndarray:
+    rgb2020 = rgb709_nits @ _709_TO_2020.T
+    lms = _pq(np.clip(rgb2020 @ _2020_TO_LMS.T, 0.0, None) / 10000.0)
+    ictcp = lms @ _LMS_TO_ITP.T
+    return ictcp * np.array([1.0, 0.5, 1.0])  # ITP: T = 0.5 Ct
+
+
+def exposure(reference: np.ndarray) -> float:
+    """Scale that maps the reference's bright end (99.9th percentile luminance) to 1."""
+    lum = np.asarray(reference, dtype=np.float64) @ _LUMA
+    top = float(np.percentile(lum, 99.9))
+    return 1.0 / top if top > 0 else 1.0
+
+
+def delta_e_itp_map(reference: np.ndarray, test: np.ndarray) -> np.ndarray:
+    """Per-pixel ΔE_ITP (ITU-R BT.2124); 1 is about one just-noticeable difference.
+
+    Scene-referred images have no absolute scale, so both are exposed alike: the reference's
+    99.9th-percentile luminance becomes reference white (100 cd/m²)."""
+    k = exposure(reference) * REFERENCE_WHITE_NITS
+    a = _itp(np.asarray(reference, dtype=np.float64) * k)
+    b = _itp(np.asarray(test, dtype=np.float64) * k)
+    return 720.0 * np.sqrt(((a - b) ** 2).sum(axis=-1))
+
+
+def delta_e_itp(reference: np.ndarray, test: np.ndarray) -> float:
+    """Mean ΔE_ITP over the object: pixels lit in either image (the black background would
+    only dilute the mean)."""
+    dmap = delta_e_itp_map(reference, test)
+    lit = (np.asarray(reference).max(axis=-1) > 0) | (np.asarray(test).max(axis=-1) > 0)
+    return float(dmap[lit].mean()) if lit.any() else 0.0
+
+
+def error_map(reference: np.ndarray, test: np.ndarray) -> np.ndarray:
+    """Per-pixel |test - reference| luminance relative to the reference's bright end."""
+    d = np.abs((np.asarray(test, np.float64) - np.asarray(reference, np.float64)) @ _LUMA)
+    return d * exposure(reference)

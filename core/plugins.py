@@ -1,0 +1,116 @@
+"""The plugin host: one function builds it; adapters arrive through a register callback."""
+
+from __future__ import annotations
+
+import importlib.metadata
+from dataclasses import dataclass, field
+from typing import Any
+
+import pluggy
+
+from . import hookspecs
+from .errors import AdapterUnavailableError, ConfigError
+
+GROUP = "brdfremap"
+
+
+@dataclass
+class AdapterEntry:
+    name: str
+    factory: Any
+    plugin: str
+
+    @property
+    def models(self) -> dict:
+        return getattr(self.factory, "models", {})
+
+    def unavailable_reason(self) -> str | None:
+        try:
+            return self.factory.unavailable_reason()
+        except Exception as exc:  # a broken plugin is listed with its error, not fatal
+            return f"availability check failed: {exc}"
+
+
+@dataclass
+class AdapterRegistry:
+    entries: dict[str, AdapterEntry] = field(default_factory=dict)
+    broken: dict[str, str] = field(default_factory=dict)
+
+    def names(self) -> list[str]:
+        return sorted(self.entries)
+
+    def get(self, name: str) -> AdapterEntry:
+        if name not in self.entries:
+            known = ", ".join(self.names()) or "none"
+            raise ConfigError(f"unknown adapter {name!r} (installed: {known}; see `remap adapters`)", field="--adapter")
+        return self.entries[name]
+
+    def create(self, name: str):
+        entry = self.get(name)
+        reason = entry.unavailable_reason()
+        if reason:
+            hint = getattr(entry.factory, "install_hint", "")
+            raise AdapterUnavailableError(f"adapter {name!r} is unavailable: {reason}" + (f"; {hint}" if hint else ""))
+        return entry.factory()
+
+
+class PluginManager(pluggy.PluginManager):
+    """pluggy's manager plus the plugins that failed to load (listed, never fatal)."""
+
+    def __init__(self) -> None:
+        super().__init__(GROUP)
+        self.broken: dict[str, str] = {}
+        self.labels: dict[int, str] = {}
+
+
+def get_plugin_manager(*, load_entrypoints: bool = True, plugins: tuple = ()) -> PluginManager:
+    """Build the plugin manager: add specs, register ``plugins``, load the entry-point group
+    ``brdfremap`` (built-ins arrive this way too), then ``check_pending()`` so a misspelt
+    hook fails at start-up naming the plugin."""
+    pm = PluginManager()
+    pm.add_hookspecs(hookspecs)
+    for plugin in plugins:
+        pm.register(plugin)
+        pm.labels[id(plugin)] = getattr(plugin, "__name__", repr(plugin))
+    if load_entrypoints:
+        for ep in importlib.metadata.entry_points(group=GROUP):
+            label = f"{ep.dist.name if ep.dist else '?'} ({ep.name})"
+            if pm.get_plugin(ep.name) is not None:
+                continue
+            try:
+                plugin = ep.load()
+            except Exception as exc:
+                pm.broken[label] = f"cannot import {ep.value}: {type(exc).__name__}: {exc}"
+                continue
+            pm.register(plugin, name=ep.name)
+            pm.labels[id(plugin)] = label
+    try:
+        pm.check_pending()
+    except pluggy.PluginValidationError as exc:
+        raise ConfigError(f"plugin {exc.plugin!r} implements an unknown hook: {exc}") from None
+    return pm
+
+
+def collect_adapters(pm: PluginManager | None = None) -> AdapterRegistry:
+    """Call every plugin's register hook; duplicate names are rejected naming both plugins."""
+    pm = pm or get_plugin_manager()
+    registry = AdapterRegistry(broken=dict(getattr(pm, "broken", {})))
+    labels = getattr(pm, "labels", {})
+    for impl in pm.hook.brdfremap_register_adapters.get_hookimpls():
+        label = labels.get(id(impl.plugin), impl.plugin_name)
+
+        def register(name: str, factory: Any, _label=label) -> None:
+            if not isinstance(name, str) or not name:
+                raise ConfigError(f"plugin {_label} registered an adapter with an invalid name {name!r}")
+            if name in registry.entries:
+                other = registry.entries[name].plugin
+                raise ConfigError(f"adapter {name!r} is registered twice: by {other} and by {_label}")
+            registry.entries[name] = AdapterEntry(name, factory, _label)
+
+        try:
+            impl.function(register=register)
+        except ConfigError:
+            raise
+        except Exception as exc:
+            registry.broken[label] = f"{type(exc).__name__}: {exc}"
+    return registry

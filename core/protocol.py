@@ -1,0 +1,73 @@
+"""The adapter contract. An adapter renders the probe scene with one material model."""
+
+from __future__ import annotations
+
+import abc
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+
+from .errors import RenderError
+from .scene import ProbeScene
+from .schemas import ModelSpec, Value
+
+
+class Adapter(abc.ABC):
+    """Base class for renderer adapters.
+
+    Class attributes are read without constructing the adapter (so listing adapters imports
+    no renderer); the constructor may import the renderer and start workers.
+    """
+
+    name: ClassVar[str]
+    summary: ClassVar[str] = ""
+    install_hint: ClassVar[str] = ""
+    models: ClassVar[dict[str, ModelSpec]] = {}
+
+    @classmethod
+    def unavailable_reason(cls) -> str | None:
+        """Why this adapter cannot run here, or None. Must be cheap: no renderer import."""
+        return None
+
+    @abc.abstractmethod
+    def render(self, model: str, params: dict[str, Value], scene: ProbeScene, lobe: str | None = None) -> np.ndarray:
+        """Render the probe scene: linear float32 H x W x 3, no tone mapping.
+
+        ``params`` is complete and validated (see ``ModelSpec.complete``). ``lobe`` is None for
+        the full material, or "diffuse" / "specular" for that lobe alone."""
+
+    @classmethod
+    def environment(cls) -> dict[str, Any]:
+        """Facts for `remap adapters` without rendering (version, variant and why). May be slow-ish."""
+        return {}
+
+    def describe(self) -> dict[str, Any]:
+        """Runtime facts for reports (renderer version, variant, device)."""
+        return {}
+
+    def write_native(self, model: str, params: dict[str, Value], out_dir: Path) -> list[Path]:
+        """Write the material in the renderer's own form; return the files written."""
+        return []
+
+    def close(self) -> None:
+        """Release workers and renderer state."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def check_image(img: Any, scene: ProbeScene, who: str) -> np.ndarray:
+    """Enforce the contract on an adapter's output; a bad image is a RenderError, never a bad fit."""
+    arr = np.asarray(img)
+    want = (scene.resolution, scene.resolution, 3)
+    if arr.shape != want:
+        raise RenderError(f"{who}: image has shape {arr.shape}, expected {want}")
+    arr = arr.astype(np.float32, copy=False)
+    if not np.isfinite(arr).all():
+        bad = int((~np.isfinite(arr)).sum())
+        raise RenderError(f"{who}: image has {bad} NaN or Inf values")
+    return arr

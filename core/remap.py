@@ -1,0 +1,350 @@
+"""The remap engine: fit a target model's parameters so its render matches a source image.
+
+The optimiser only ever calls ``render(params, lobe) -> image``; it never evaluates a BRDF.
+Schemes follow Sztrajman et al. (MAM 2017): one-stage (all parameters at once), two-stage
+(specular and diffuse lobes fitted separately, then merged; the default) and three-stage
+(two-stage, then a joint refinement from its result).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Literal
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from .errors import OptimisationError
+from .metrics import delta_e_itp, relative_rmse
+from .schemas import ModelSpec, Value
+
+Scheme = Literal["one", "two", "three"]
+RenderFn = Callable[[dict[str, Value], "str | None"], np.ndarray]
+ProgressFn = Callable[[str, int, float], None]
+
+
+@dataclass(frozen=True)
+class RemapOptions:
+    scheme: Scheme = "two"
+    fd_step: float = 0.01
+    """Forward-difference step in normalised parameter units. scipy's default (~1e-8) is
+    below float32 resolution, so renders would not change and the Jacobian would be zero."""
+    starts: int = 4
+    """Initial points tried per stage (the defaults plus a low-discrepancy spread over the
+    scalar parameters); the best one starts the fit. 1 disables multi-start."""
+    max_renders_per_stage: int = 80
+    ftol: float = 1e-4
+    xtol: float = 1e-4
+    method: Literal["trf", "dogbox"] = "trf"
+    """scipy least-squares method; TRF (bounded, reflective) is the paper's."""
+    threshold: float = 0.05
+    """Relative RMSE above which a result is not reliable."""
+    cond_limit: float = 1e4
+
+
+class ParamSpace:
+    """Maps the free parameters of a model to a vector in [0, 1]^n and back."""
+
+    def __init__(self, spec: ModelSpec, base: dict[str, Value], free: list[str]):
+        self.spec, self.base, self.free = spec, dict(base), list(free)
+        self.slices: dict[str, slice] = {}
+        i = 0
+        for name in self.free:
+            n = spec.param(name).size
+            self.slices[name] = slice(i, i + n)
+            i += n
+        self.dim = i
+
+    def _to_unit(self, name: str, x: float) -> float:
+        p = self.spec.param(name)
+        if p.scale == "log":
+            return math.log(x / p.lower) / math.log(p.upper / p.lower) if x > 0 else 0.0
+        return (x - p.lower) / (p.upper - p.lower)
+
+    def _from_unit(self, name: str, u: float) -> float:
+        p = self.spec.param(name)
+        u = min(max(float(u), 0.0), 1.0)
+        if p.scale == "log":
+            return p.lower * (p.upper / p.lower) ** u
+        return p.lower + u * (p.upper - p.lower)
+
+    def encode(self, params: dict[str, Value]) -> np.ndarray:
+        u = np.empty(self.dim)
+        for name, sl in self.slices.items():
+            v = params[name]
+            vals = v if isinstance(v, tuple) else (v,)
+            u[sl] = [min(max(self._to_unit(name, float(x)), 0.0), 1.0) for x in vals]
+        return u
+
+    def decode(self, u: np.ndarray) -> dict[str, Value]:
+        out = dict(self.base)
+        for name, sl in self.slices.items():
+            vals = tuple(self._from_unit(name, x) for x in u[sl])
+            out[name] = vals if self.spec.param(name).kind == "rgb" else vals[0]
+        return out
+
+    def labels(self) -> list[str]:
+        out = []
+        for name, sl in self.slices.items():
+            n = sl.stop - sl.start
+            out += [name] if n == 1 else [f"{name}[{c}]" for c in "rgb"[:n]]
+        return out
+
+    def scalar_indices(self) -> list[int]:
+        return [sl.start for name, sl in self.slices.items() if self.spec.param(name).kind == "scalar"]
+
+
+@dataclass
+class StageResult:
+    name: str
+    lobe: str | None
+    free: list[str]
+    renders: int
+    start_error: float
+    error: float
+    status: str
+    seconds: float
+
+
+@dataclass
+class RemapResult:
+    """What a remap produced. ``params`` is the complete target parameter set."""
+
+    params: dict[str, Value]
+    fitted: list[str]
+    scheme: str
+    scheme_used: str
+    relative_rmse: float
+    perceptual: float
+    renders: int
+    seconds: float
+    reliable: bool
+    reason: str
+    stages: list[StageResult] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    jacobian_condition: float | None = None
+    target_image: np.ndarray | None = None
+
+
+class _BudgetExhausted(Exception):
+    pass
+
+
+class _Stage:
+    """One least-squares fit against one source image, counting renders and keeping the best point."""
+
+    def __init__(self, name, lobe, space: ParamSpace, render: RenderFn, source: np.ndarray, norm: float,
+                 options: RemapOptions, progress: ProgressFn | None, counter: list[int]):
+        self.name, self.lobe, self.space, self.render = name, lobe, space, render
+        self.source = np.asarray(source, dtype=np.float64).ravel()
+        self.norm, self.options, self.progress, self.counter = norm, options, progress, counter
+        self.renders = 0
+        self.best_u: np.ndarray | None = None
+        self.best_err = math.inf
+        self._memo: dict[bytes, np.ndarray] = {}
+
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        key = np.round(u, 12).tobytes()
+        if key in self._memo:
+            return self._memo[key]
+        if self.renders >= self.options.max_renders_per_stage:
+            raise _BudgetExhausted
+        img = self.render(self.space.decode(u), self.lobe)
+        self.renders += 1
+        self.counter[0] += 1
+        r = (np.asarray(img, dtype=np.float64).ravel() - self.source) / self.norm
+        if not np.isfinite(r).all():
+            raise OptimisationError(f"stage {self.name}: residuals are not finite at {self.space.decode(u)}")
+        self._memo[key] = r
+        err = float(np.linalg.norm(r))
+        if err < self.best_err:
+            self.best_err, self.best_u = err, u.copy()
+        if self.progress:
+            self.progress(self.name, self.counter[0], self.best_err)
+        return r
+
+    def jacobian(self, u: np.ndarray) -> np.ndarray:
+        r0 = self.residual(u)
+        h = self.options.fd_step
+        J = np.empty((r0.size, u.size))
+        for j in range(u.size):
+            step = h if u[j] + h <= 1.0 else -h
+            v = u.copy()
+            v[j] += step
+            J[:, j] = (self.residual(v) - r0) / step
+        return J
+
+    def starts(self, u_base: np.ndarray) -> list[np.ndarray]:
+        out = [u_base]
+        idx = self.space.scalar_indices()
+        if not idx:
+            return out
+        primes = [2, 3, 5, 7, 11, 13, 17, 19]
+        for i in range(1, self.options.starts):
+            u = u_base.copy()
+            for d, j in enumerate(idx):
+                u[j] = 0.1 + 0.8 * _van_der_corput(i, primes[d % len(primes)])
+            out.append(u)
+        return out
+
+    def run(self, u_base: np.ndarray) -> np.ndarray:
+        t0 = time.perf_counter()
+        status = "converged"
+        if self.space.dim == 0:
+            return u_base
+        try:
+            errs = [(float(np.linalg.norm(self.residual(u))), i, u) for i, u in enumerate(self.starts(u_base))]
+            start_err, _, u0 = min(errs, key=lambda t: (t[0], t[1]))
+            res = least_squares(
+                self.residual, u0, jac=self.jacobian, bounds=(0.0, 1.0), method=self.options.method,
+                ftol=self.options.ftol, xtol=self.options.xtol, gtol=1e-10, x_scale=1.0,
+            )
+            status = "converged" if res.status > 0 else f"stopped: {res.message}"
+        except _BudgetExhausted:
+            start_err = start_err if "start_err" in locals() else self.best_err
+            status = f"stopped at the render budget ({self.options.max_renders_per_stage})"
+        self.result = StageResult(self.name, self.lobe, self.space.free, self.renders, start_err, self.best_err,
+                                  status, time.perf_counter() - t0)
+        return self.best_u
+
+
+def _van_der_corput(n: int, base: int) -> float:
+    q, denom = 0.0, 1.0
+    while n:
+        n, rem = divmod(n, base)
+        denom *= base
+        q += rem / denom
+    return q
+
+
+def plan_stages(scheme: Scheme, target: ModelSpec, free: list[str], source_lobes: dict[str, np.ndarray | None]):
+    """Return (scheme actually used, [(stage name, lobe, free params, source key)], notes)."""
+    notes = []
+    if scheme == "one":
+        return "one", [("all", None, free, None)], notes
+    can_split = target.has_lobes and all(source_lobes.get(lobe) is not None for lobe in ("diffuse", "specular"))
+    if not can_split:
+        why = (f"target model {target.name!r} declares no lobes" if not target.has_lobes
+               else "the source model cannot render its lobes separately")
+        notes.append(f"{scheme}-stage scheme needs lobe isolation: {why}; fell back to one-stage")
+        return "one", [("all", None, free, None)], notes
+    stages = []
+    empty = [lobe for lobe in ("specular", "diffuse") if target.lobes[lobe].empty]
+    for lobe in ("specular", "diffuse"):
+        spec = target.lobes[lobe]
+        if spec.empty:
+            continue
+        params = [p for p in free if p in spec.params]
+        # A lobe the target lacks is folded into the other one: fit it against the full image.
+        src_key = None if empty else lobe
+        stages.append((lobe, lobe if not empty else None, params, src_key))
+    leftover = [p for p in free if not any(p in s[2] for s in stages)]
+    if leftover and stages:
+        stages[0] = (stages[0][0], stages[0][1], stages[0][2] + leftover, stages[0][3])
+    if scheme == "three":
+        stages.append(("joint", None, free, None))
+    return scheme, stages, notes
+
+
+def remap(
+    target: ModelSpec,
+    render: RenderFn,
+    source: np.ndarray,
+    source_lobes: dict[str, np.ndarray | None] | None = None,
+    *,
+    base: dict[str, Value],
+    free: list[str],
+    options: RemapOptions = RemapOptions(),
+    progress: ProgressFn | None = None,
+) -> RemapResult:
+    """Fit ``free`` parameters of ``target`` (others as in ``base``) so ``render`` matches ``source``.
+
+    ``source_lobes`` holds the source's diffuse-only and specular-only images (None where
+    the source cannot isolate a lobe; an all-zero image where it has no such lobe)."""
+    t0 = time.perf_counter()
+    source = np.asarray(source, dtype=np.float32)
+    if source.ndim != 3 or source.shape[2] != 3:
+        raise OptimisationError(f"`source` must be an H x W x 3 image, got shape {source.shape}")
+    if not np.isfinite(source).all():
+        raise OptimisationError("`source` has NaN or Inf pixels")
+    norm = float(np.linalg.norm(source.astype(np.float64)))
+    if norm == 0.0:
+        raise OptimisationError("`source` image is black: nothing to match (check the light and the material)")
+    unknown = [p for p in free if p not in target.names]
+    if unknown:
+        raise OptimisationError(f"`free` names unknown parameters {unknown} of model {target.name!r}")
+
+    source_lobes = source_lobes or {}
+    scheme_used, stages, notes = plan_stages(options.scheme, target, free, source_lobes)
+    counter = [0]
+    params = dict(base)
+    results: list[StageResult] = []
+    last_stage: _Stage | None = None
+    for name, lobe, stage_free, src_key in stages:
+        if not stage_free:
+            continue
+        space = ParamSpace(target, params, stage_free)
+        src = source if src_key is None else source_lobes[src_key]
+        stage = _Stage(name, lobe, space, render, src, norm, options, progress, counter)
+        u_best = stage.run(space.encode(params))
+        params = space.decode(u_best)
+        results.append(stage.result)
+        last_stage = stage
+
+    final = np.asarray(render(params, None), dtype=np.float32)
+    counter[0] += 1
+    err = relative_rmse(source, final)
+    if progress:
+        progress("final", counter[0], err)
+
+    reasons, cond = _verdict(target, params, free, source, norm, render, err, options, counter, notes)
+    if len(reasons) == 1 and err > options.threshold and all(r.status == "converged" for r in results):
+        reasons[0] += (" although the fit converged with no parameter pinned and a well-conditioned Jacobian:"
+                       " a model mismatch (the closest this target model gets), not a failed fit")
+    return RemapResult(
+        params=params, fitted=list(free), scheme=options.scheme, scheme_used=scheme_used,
+        relative_rmse=err, perceptual=delta_e_itp(source, final), renders=counter[0],
+        seconds=time.perf_counter() - t0, reliable=not reasons, reason="; ".join(reasons) or "ok",
+        stages=results, notes=notes, jacobian_condition=cond, target_image=final,
+    )
+
+
+def _verdict(target, params, free, source, norm, render, err, options, counter, notes):
+    """Why the result should not be trusted (empty when it can be), and the Jacobian's condition."""
+    reasons: list[str] = []
+    if err > options.threshold:
+        reasons.append(f"error {err:.1%} above the {options.threshold:.0%} threshold")
+    if not free:
+        return reasons, None
+    # One Jacobian of the full image at the solution: conditioning and active bounds.
+    space = ParamSpace(target, params, free)
+    stage = _Stage("check", None, space, render, source, norm,
+                   RemapOptions(fd_step=options.fd_step, max_renders_per_stage=10**6), None, counter)
+    u = space.encode(params)
+    r = stage.residual(u)
+    J = stage.jacobian(u)
+    labels = space.labels()
+    col = np.linalg.norm(J, axis=0)
+    dead = [labels[j] for j in range(len(col)) if col[j] <= 1e-6 * max(col.max(), 1e-30)]
+    cond = None
+    if dead:
+        reasons.append(f"{', '.join(dead)} did not change the image (ill-conditioned Jacobian)")
+    elif len(col) > 1:
+        s = np.linalg.svd(J / col, compute_uv=False)
+        cond = float(s[0] / s[-1]) if s[-1] > 0 else math.inf
+        if cond > options.cond_limit:
+            reasons.append(f"ill-conditioned Jacobian (condition {cond:.2g}): parameters trade off against each other")
+    g = J.T @ r
+    rr = float(r @ r)
+    for j, lab in enumerate(labels):
+        at_lo, at_hi = u[j] <= 1e-3, u[j] >= 1 - 1e-3
+        wants_out = (at_lo and g[j] > 0) or (at_hi and g[j] < 0)
+        if not wants_out or col[j] == 0:
+            continue
+        better = math.sqrt(max(rr - g[j] ** 2 / col[j] ** 2, 0.0))
+        if math.sqrt(rr) - better > max(0.1 * math.sqrt(rr), 0.002):
+            side = "lower" if at_lo else "upper"
+            reasons.append(f"{lab} pinned at its {side} bound (without it the error would drop to about {better:.1%})")
+    return reasons, cond

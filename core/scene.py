@@ -1,0 +1,76 @@
+"""The probe scene as data: every adapter realises it in the same physical units."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Sphere(_Strict):
+    center: tuple[float, float, float] = Field((0.0, 0.0, 0.0), description="Centre of the probe sphere (scene units).")
+    radius: float = Field(2.0, gt=0, description="Radius of the probe sphere (scene units).")
+
+
+class Camera(_Strict):
+    """A pinhole camera looking at ``target`` from ``distance`` along +z (the view axis)."""
+
+    distance: float = Field(6.5, gt=0, description="Distance from the target along +z.")
+    target: tuple[float, float, float] = Field((0.0, 0.0, 0.0), description="Point the camera looks at.")
+    fov: float = Field(40.0, gt=0, lt=180, description="Horizontal field of view in degrees.")
+    up: tuple[float, float, float] = Field((0.0, 1.0, 0.0), description="Up vector of the image.")
+
+    @property
+    def position(self) -> tuple[float, float, float]:
+        tx, ty, tz = self.target
+        return (tx, ty, tz + self.distance)
+
+
+class PointLight(_Strict):
+    """An isotropic point light, placed in spherical coordinates around the view axis (+z)."""
+
+    r: float = Field(5.2, gt=0, description="Distance from the origin.")
+    theta: float = Field(45.0, ge=0, le=180, description="Polar angle from +z (the view direction), degrees.")
+    phi: float = Field(125.0, description="Azimuth in the image plane from +x towards +y, degrees.")
+    intensity: float = Field(30.0, gt=0, description="Radiant intensity in W/sr (white).")
+
+    @property
+    def position(self) -> tuple[float, float, float]:
+        t, p = math.radians(self.theta), math.radians(self.phi)
+        return (self.r * math.sin(t) * math.cos(p), self.r * math.sin(t) * math.sin(p), self.r * math.cos(t))
+
+
+class ProbeScene(_Strict):
+    """The fixed scene every remap renders: a sphere lit by one point light, black background,
+    direct lighting only. Images are linear scene-referred RGB, float32, H x W x 3."""
+
+    name: str = Field("probe", description="A label for reports.")
+    note: str = Field("", description="Free text: what this scene is for.")
+    sphere: Sphere = Field(default_factory=Sphere)
+    camera: Camera = Field(default_factory=Camera)
+    light: PointLight = Field(default_factory=PointLight)
+    resolution: int = Field(128, ge=8, le=4096, description="Image width and height in pixels.")
+    spp: int = Field(16, ge=1, le=65536, description="Samples per pixel.")
+    seed: int = Field(0, ge=0, description="Sampler seed; renders with the same seed are repeatable.")
+
+    @field_validator("note")
+    @classmethod
+    def _strip(cls, v: str) -> str:
+        return v.strip()
+
+    def with_(self, **changes) -> "ProbeScene":
+        return self.model_copy(update={k: v for k, v in changes.items() if v is not None})
+
+    def cache_key(self) -> str:
+        return self.model_dump_json(exclude={"name", "note"})
+
+
+def load_scene(path: str | Path) -> ProbeScene:
+    from .configio import load_yaml_model
+
+    return load_yaml_model(path, ProbeScene)

@@ -1,0 +1,214 @@
+"""Material models described as data: parameters, bounds, lobes. No renderer knowledge."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from .errors import ConfigError
+
+Value = float | tuple[float, float, float] | str
+LOBES = ("diffuse", "specular")
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class ParamSpec(_Strict):
+    """One parameter of a material model."""
+
+    name: str = Field(description="Parameter name as the user writes it.")
+    kind: Literal["scalar", "rgb", "choice"] = Field(description="A number, three numbers, or one of `choices`.")
+    lower: float = Field(0.0, description="Lower bound (scalar and rgb).")
+    upper: float = Field(1.0, description="Upper bound (scalar and rgb).")
+    default: Value = Field(description="Value used when neither the source nor --fix gives one.")
+    choices: tuple[str, ...] = Field((), description="Allowed values of a choice parameter.")
+    scale: Literal["linear", "log"] = Field("linear", description="How the optimiser normalises it to [0, 1].")
+    fit: bool = Field(True, description="Fitted by default when it is the target (choices never are).")
+    active_when: dict[str, tuple[str, ...]] = Field(
+        default_factory=dict, description="Only meaningful when these choice parameters take one of these values."
+    )
+    description: str = Field("", description="What it does.")
+
+    @model_validator(mode="after")
+    def _check(self) -> "ParamSpec":
+        if self.kind == "choice":
+            if not self.choices or self.default not in self.choices:
+                raise ValueError(f"choice parameter {self.name!r} needs choices that include its default")
+        else:
+            if not self.lower < self.upper:
+                raise ValueError(f"parameter {self.name!r}: lower must be below upper")
+            if self.scale == "log" and self.lower <= 0:
+                raise ValueError(f"parameter {self.name!r}: log scale needs a positive lower bound")
+        return self
+
+    @property
+    def size(self) -> int:
+        return {"scalar": 1, "rgb": 3, "choice": 0}[self.kind]
+
+    def coerce(self, value: Any, where: str, file: str | None = None) -> Value:
+        """Validate a user value and return it in canonical form (float, 3-tuple or str)."""
+        if self.kind == "choice":
+            if not isinstance(value, str) or value not in self.choices:
+                shown = ", ".join(self.choices[:12]) + (" …" if len(self.choices) > 12 else "")
+                raise ConfigError(f"{value!r} is not one of: {shown}", file=file, field=where)
+            return value
+        if self.kind == "scalar":
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ConfigError(f"expected a number, got {value!r}", file=file, field=where)
+            values = (float(value),)
+        else:
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                values = (float(value),) * 3
+            elif isinstance(value, (list, tuple)) and len(value) == 3 and all(
+                isinstance(v, (int, float)) and not isinstance(v, bool) for v in value
+            ):
+                values = tuple(float(v) for v in value)
+            else:
+                raise ConfigError(f"expected a number or a list of 3 numbers (RGB), got {value!r}", file=file, field=where)
+        for v in values:
+            if not math.isfinite(v) or not (self.lower <= v <= self.upper):
+                raise ConfigError(
+                    f"{v:g} is outside the bounds [{self.lower:g}, {self.upper:g}]", file=file, field=where
+                )
+        return values[0] if self.kind == "scalar" else values  # type: ignore[return-value]
+
+
+class LobeSpec(_Strict):
+    """How to see one lobe of a model alone, and which parameters shape it.
+
+    ``overrides`` are parameter values that switch the other lobe off (an adapter may
+    instead isolate the lobe natively, e.g. with render passes, and leave it empty).
+    ``empty`` marks a lobe the model does not have: it renders black without a render."""
+
+    params: tuple[str, ...] = Field((), description="Parameters fitted in this lobe's stage.")
+    overrides: dict[str, Value] = Field(default_factory=dict, description="Values that isolate this lobe.")
+    empty: bool = Field(False, description="The model has no such lobe.")
+
+
+class ModelSpec(_Strict):
+    """A material model of one adapter."""
+
+    name: str
+    description: str = ""
+    parameters: tuple[ParamSpec, ...]
+    lobes: dict[Literal["diffuse", "specular"], LobeSpec] = Field(
+        default_factory=dict, description="Empty when the adapter cannot isolate lobes (two-stage then falls back)."
+    )
+
+    @model_validator(mode="after")
+    def _check(self) -> "ModelSpec":
+        names = [p.name for p in self.parameters]
+        if len(set(names)) != len(names):
+            raise ValueError(f"model {self.name!r} has duplicate parameter names")
+        for lobe in self.lobes.values():
+            for n in (*lobe.params, *lobe.overrides):
+                if n not in names:
+                    raise ValueError(f"model {self.name!r}: lobe refers to unknown parameter {n!r}")
+        return self
+
+    def param(self, name: str) -> ParamSpec:
+        for p in self.parameters:
+            if p.name == name:
+                return p
+        raise KeyError(name)
+
+    @property
+    def names(self) -> list[str]:
+        return [p.name for p in self.parameters]
+
+    @property
+    def has_lobes(self) -> bool:
+        return all(lobe in self.lobes for lobe in LOBES)
+
+    def complete(self, given: dict[str, Any], *, file: str | None = None, prefix: str = "params") -> dict[str, Value]:
+        """Validate ``given`` and fill the rest with defaults. Errors name the field."""
+        unknown = [k for k in given if k not in self.names]
+        if unknown:
+            raise ConfigError(
+                f"unknown parameter {unknown[0]!r} for model {self.name!r} (known: {', '.join(self.names)})",
+                file=file,
+                field=f"{prefix}.{unknown[0]}",
+            )
+        out: dict[str, Value] = {}
+        for p in self.parameters:
+            out[p.name] = p.coerce(given[p.name], f"{prefix}.{p.name}", file) if p.name in given else p.default
+        return out
+
+    def is_active(self, name: str, params: dict[str, Value]) -> bool:
+        spec = self.param(name)
+        return all(params.get(k) in allowed for k, allowed in spec.active_when.items())
+
+    def fittable(self, params: dict[str, Value], fixed: set[str] = frozenset()) -> list[str]:
+        """Parameters the optimiser varies by default: numeric, active, marked `fit`, not fixed."""
+        return [
+            p.name
+            for p in self.parameters
+            if p.kind != "choice" and p.fit and p.name not in fixed and self.is_active(p.name, params)
+        ]
+
+    def with_lobe(self, params: dict[str, Value], lobe: str | None) -> dict[str, Value]:
+        """Apply a lobe's overrides (for adapters that isolate lobes by parameters)."""
+        if lobe is None:
+            return params
+        return {**params, **self.lobes[lobe].overrides}
+
+
+class Material(_Strict):
+    """A material file: which adapter and model, and its parameters."""
+
+    adapter: str = Field(description="Adapter that renders it (see `remap adapters`).")
+    model: str = Field(description="Material model of that adapter.")
+    params: dict[str, Any] = Field(default_factory=dict, description="Parameter values; others take defaults.")
+    name: str = Field("", description="Optional label.")
+
+
+def load_material(path: str | Path) -> Material:
+    from .configio import load_yaml_model
+
+    return load_yaml_model(path, Material)
+
+
+def format_value(v: Value) -> str:
+    if isinstance(v, str):
+        return v
+    if isinstance(v, tuple):
+        return "[" + ", ".join(f"{x:.4g}" for x in v) + "]"
+    return f"{v:.4g}"
+
+
+def parse_fix(text: str, spec: ModelSpec, flag: str = "--fix") -> tuple[str, Value]:
+    """Parse ``name=value`` from the command line against the target model."""
+    if "=" not in text:
+        raise ConfigError(f"expected name=value, got {text!r}", field=flag)
+    name, raw = (s.strip() for s in text.split("=", 1))
+    if name not in spec.names:
+        raise ConfigError(
+            f"unknown parameter {name!r} for model {spec.name!r} (known: {', '.join(spec.names)})", field=f"{flag} {name}"
+        )
+    p = spec.param(name)
+    value: Any = raw
+    if p.kind != "choice":
+        try:
+            parts = [float(x) for x in raw.replace(" ", "").strip("[]").split(",")]
+        except ValueError:
+            raise ConfigError(f"expected a number or r,g,b, got {raw!r}", field=f"{flag} {name}") from None
+        value = parts[0] if len(parts) == 1 else parts
+    return name, p.coerce(value, f"{flag} {name}")
+
+
+__all__ = [
+    "ParamSpec",
+    "LobeSpec",
+    "ModelSpec",
+    "Material",
+    "load_material",
+    "parse_fix",
+    "format_value",
+    "ValidationError",
+    "LOBES",
+]

@@ -1,0 +1,224 @@
+"""One remap job: validate the inputs, render the source, fit the target, write the results.
+
+This is where adapters meet the engine; it still knows no renderer by name."""
+
+from __future__ import annotations
+
+import json
+import math
+import platform
+import time
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .atomic import write_json_atomic
+from .cache import RenderCache, render_key
+from .errors import ConfigError
+from .imageio import write_exr, write_previews
+from .metrics import error_map, relative_rmse
+from .plugins import AdapterRegistry
+from .protocol import Adapter, check_image
+from .remap import ProgressFn, RemapOptions, RemapResult, remap
+from .scene import ProbeScene
+from .schemas import Material, ModelSpec, Value
+
+
+@dataclass
+class Job:
+    """A validated remap request."""
+
+    source: Material
+    source_file: str
+    source_params: dict[str, Value]
+    source_spec: ModelSpec
+    target_adapter: str
+    target_model: str
+    target_spec: ModelSpec
+    base: dict[str, Value]
+    free: list[str]
+    fixed: dict[str, Value]
+    scene: ProbeScene
+    options: RemapOptions
+
+
+def _model(registry: AdapterRegistry, adapter: str, model: str, file: str | None, field_name: str) -> ModelSpec:
+    entry = registry.get(adapter)
+    if model not in entry.models:
+        known = ", ".join(sorted(entry.models)) or "none"
+        raise ConfigError(f"adapter {adapter!r} has no model {model!r} (models: {known})", file=file, field=field_name)
+    return entry.models[model]
+
+
+def prepare(
+    registry: AdapterRegistry,
+    source: Material,
+    source_file: str,
+    target_adapter: str,
+    target_model: str,
+    scene: ProbeScene,
+    fixed: dict[str, Value],
+    options: RemapOptions,
+) -> Job:
+    """Check everything before any render: adapters, models, parameters, bounds."""
+    if source.adapter not in registry.entries:
+        known = ", ".join(registry.names()) or "none"
+        raise ConfigError(f"unknown adapter {source.adapter!r} (installed: {known})", file=source_file, field="adapter")
+    src_spec = _model(registry, source.adapter, source.model, source_file, "model")
+    src_params = src_spec.complete(source.params, file=source_file)
+    tgt_spec = _model(registry, target_adapter, target_model, None, "--model")
+    base = tgt_spec.complete({})
+    if (source.adapter, source.model) == (target_adapter, target_model):
+        # Same model: discrete choices (distribution, material preset) carry over unless fixed.
+        for p in tgt_spec.parameters:
+            if p.kind == "choice":
+                base[p.name] = src_params[p.name]
+    base.update(fixed)
+    free = tgt_spec.fittable(base, fixed=set(fixed))
+    return Job(source, source_file, src_params, src_spec, target_adapter, target_model, tgt_spec, base, free,
+               dict(fixed), scene, options)
+
+
+@dataclass
+class Outcome:
+    job: Job
+    result: RemapResult
+    source_image: np.ndarray
+    noise_floor: float
+    source_renders: int
+    adapters: dict[str, Any] = field(default_factory=dict)
+
+
+class _CachedRenderer:
+    def __init__(self, adapter: Adapter, name: str, model: str, scene: ProbeScene, cache: RenderCache):
+        self.adapter, self.name, self.model, self.scene, self.cache = adapter, name, model, scene, cache
+        self._scene_key = scene.cache_key()
+
+    def __call__(self, params: dict[str, Value], lobe: str | None = None, scene: ProbeScene | None = None):
+        sc = scene or self.scene
+        rounded = {k: _round(v) for k, v in params.items()}
+        key = render_key(self.name, self.model, rounded, sc.cache_key(), lobe)
+        who = f"adapter {self.name!r} model {self.model!r}"
+        return self.cache.get_or_render(
+            key, lambda: check_image(self.adapter.render(self.model, dict(params), sc, lobe), sc, who))
+
+
+def _round(v: Value) -> Value:
+    if isinstance(v, tuple):
+        return tuple(float(f"{x:.9g}") for x in v)
+    if isinstance(v, float):
+        return float(f"{v:.9g}")
+    return v
+
+
+@contextmanager
+def open_adapters(registry: AdapterRegistry, names: Iterable[str]) -> Iterator[dict[str, Adapter]]:
+    """Construct each named adapter once (this is where renderers get imported) and close them all."""
+    adapters: dict[str, Adapter] = {}
+    try:
+        for name in dict.fromkeys(names):
+            adapters[name] = registry.create(name)
+        yield adapters
+    finally:
+        for a in adapters.values():
+            a.close()
+
+
+def run(job: Job, registry: AdapterRegistry, adapters: dict[str, Adapter], progress: ProgressFn | None = None) -> Outcome:
+    """Render the source (full, lobes, a second seed for the noise floor) and fit the target."""
+    t0 = time.perf_counter()
+    src_cache, tgt_cache = RenderCache(), RenderCache()
+    src = _CachedRenderer(adapters[job.source.adapter], job.source.adapter, job.source.model, job.scene, src_cache)
+    tgt = _CachedRenderer(adapters[job.target_adapter], job.target_adapter, job.target_model, job.scene, tgt_cache)
+    if progress:
+        progress("source", 0, float("nan"))
+    source_image = src(job.source_params)
+    noise_floor = relative_rmse(source_image, src(job.source_params, scene=job.scene.with_(seed=job.scene.seed + 1)))
+    lobes: dict[str, np.ndarray | None] = {}
+    for lobe in ("diffuse", "specular"):
+        spec = job.source_spec.lobes.get(lobe)
+        if spec is None:
+            lobes[lobe] = None
+        elif spec.empty:
+            lobes[lobe] = np.zeros_like(source_image)
+        else:
+            lobes[lobe] = src(job.source_params, lobe)
+    opts = job.options
+    threshold = max(opts.threshold, 2.0 * noise_floor)
+    if threshold != opts.threshold:
+        opts = replace(opts, threshold=threshold)
+    result = remap(job.target_spec, tgt, source_image, lobes, base=job.base, free=job.free, options=opts,
+                   progress=progress)
+    result.seconds = time.perf_counter() - t0
+    info = {n: {"plugin": registry.get(n).plugin, **a.describe()} for n, a in adapters.items()}
+    return Outcome(job, result, source_image, noise_floor, src_cache.misses, info)
+
+
+def _finite_or_none(x: float | None) -> float | None:
+    return x if x is not None and math.isfinite(x) else None
+
+
+def _jsonable(v: Value) -> Any:
+    return list(v) if isinstance(v, tuple) else v
+
+
+def result_document(outcome: Outcome) -> dict[str, Any]:
+    job, r = outcome.job, outcome.result
+    return {
+        "source": {
+            "file": job.source_file,
+            "adapter": job.source.adapter,
+            "model": job.source.model,
+            "params": {k: _jsonable(v) for k, v in job.source_params.items()
+                       if job.source_spec.is_active(k, job.source_params)},
+        },
+        "target": {"adapter": job.target_adapter, "model": job.target_model},
+        "params": {k: _jsonable(v) for k, v in r.params.items() if job.target_spec.is_active(k, r.params)},
+        "fitted": r.fitted,
+        "fixed": {k: _jsonable(v) for k, v in job.fixed.items()},
+        "metrics": {
+            "relative_rmse": r.relative_rmse,
+            "perceptual": r.perceptual,
+            "perceptual_metric": "mean ΔE_ITP over the object (1 ≈ just noticeable)",
+            "noise_floor": outcome.noise_floor,
+            "jacobian_condition": _finite_or_none(r.jacobian_condition),
+        },
+        "renders": r.renders,
+        "source_renders": outcome.source_renders,
+        "seconds": r.seconds,
+        "scheme": r.scheme,
+        "scheme_used": r.scheme_used,
+        "reliable": r.reliable,
+        "reason": r.reason,
+        "notes": r.notes,
+        "stages": [
+            {"name": s.name, "lobe": s.lobe, "fitted": s.free, "renders": s.renders, "start_error": s.start_error,
+             "error": s.error, "status": s.status, "seconds": s.seconds}
+            for s in r.stages
+        ],
+        "scene": json.loads(job.scene.model_dump_json()),
+        "options": {k: getattr(job.options, k) for k in job.options.__dataclass_fields__},
+        "adapters": outcome.adapters,
+        "host": {"python": platform.python_version(), "machine": platform.machine()},
+    }
+
+
+def write_outputs(outcome: Outcome, out_dir: Path, target_adapter: Adapter | None = None) -> list[Path]:
+    """Images first, native material next, result.json last: a result.json always describes a complete run."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    src, tgt = outcome.source_image, outcome.result.target_image
+    write_exr(out_dir / "source.exr", src)
+    write_exr(out_dir / "target.exr", tgt)
+    write_previews(out_dir, src, tgt, error_map(src, tgt))
+    files = [out_dir / n for n in ("source.exr", "target.exr", "source.png", "target.png", "error.png")]
+    if target_adapter is not None:
+        files += target_adapter.write_native(outcome.job.target_model, outcome.result.params, out_dir)
+    doc = result_document(outcome)
+    doc["files"] = [p.name for p in files]
+    write_json_atomic(out_dir / "result.json", doc)
+    return files + [out_dir / "result.json"]

@@ -1,0 +1,49 @@
+"""A tiny analytic adapter in numpy: the example of authoring an adapter, and a fast,
+exact renderer for optimiser unit tests. Never the evidence that remapping works."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from brdfremap.core import Adapter, LobeSpec, ModelSpec, ParamSpec, ProbeScene
+from brdfremap.core.testing import point_light_irradiance, sphere_hits
+
+TOY = ModelSpec(
+    name="toy",
+    description="Lambert + a Gaussian-in-angle specular lobe.",
+    parameters=(
+        ParamSpec(name="diffuse", kind="rgb", default=(0.5, 0.5, 0.5)),
+        ParamSpec(name="specular", kind="scalar", lower=0.0, upper=2.0, default=0.5),
+        ParamSpec(name="alpha", kind="scalar", lower=0.01, upper=1.0, default=0.2, scale="log"),
+        ParamSpec(name="unused", kind="scalar", default=0.5, fit=False),
+    ),
+    lobes={
+        "diffuse": LobeSpec(params=("diffuse",), overrides={"specular": 0.0}),
+        "specular": LobeSpec(params=("specular", "alpha"), overrides={"diffuse": (0.0, 0.0, 0.0)}),
+    },
+)
+
+
+class ToyAdapter(Adapter):
+    name = "toy"
+    summary = "analytic numpy sphere (tests only)"
+    models = {"toy": TOY}
+
+    def __init__(self):
+        self.calls = 0
+
+    def render(self, model, params, scene: ProbeScene, lobe=None):
+        self.calls += 1
+        p = self.models[model].with_lobe(params, lobe)
+        hits = sphere_hits(scene)
+        e, l = point_light_irradiance(scene, hits)
+        h = l + hits.view
+        h /= np.linalg.norm(h, axis=-1, keepdims=True)
+        cos_h = np.clip((h * hits.normal).sum(-1), 1e-6, 1.0)
+        tan2 = (1 - cos_h**2) / cos_h**2
+        a = p["alpha"]
+        spec = p["specular"] * np.exp(-tan2 / a**2) / (math.pi * a**2 * cos_h**4) / 4
+        f = np.asarray(p["diffuse"]) / math.pi + spec[..., None]
+        return (f * e[..., None]).astype(np.float32)

@@ -1,0 +1,45 @@
+import os
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).parent))  # analytic_adapter
+
+
+def pytest_addoption(parser):
+    parser.addoption("--run-slow", action="store_true", help="also run tests marked slow")
+
+
+def pytest_collection_modifyitems(config, items):
+    if config.getoption("--run-slow"):
+        return
+    skip = pytest.mark.skip(reason="slow: pass --run-slow")
+    for item in items:
+        if "slow" in item.keywords:
+            item.add_marker(skip)
+
+
+@pytest.fixture(scope="session")
+def root() -> Path:
+    return ROOT
+
+
+def need_adapter(factory):
+    """Skip clearly when an adapter is unavailable here; in CI that is a failure instead."""
+    reason = factory.unavailable_reason()
+    if reason:
+        if os.environ.get("CI"):
+            pytest.fail(f"adapter {factory.name} must be available in CI: {reason}")
+        pytest.skip(f"adapter {factory.name} unavailable: {reason}")
+
+
+@pytest.fixture(scope="session")
+def mitsuba_adapter():
+    from brdfremap.adapters.mitsuba.adapter import MitsubaAdapter
+
+    need_adapter(MitsubaAdapter)
+    a = MitsubaAdapter()
+    yield a
+    a.close()

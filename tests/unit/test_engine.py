@@ -1,0 +1,134 @@
+"""The optimiser against the analytic toy adapter (exact, fast)."""
+
+import numpy as np
+import pytest
+
+from brdfremap.core.errors import OptimisationError
+from brdfremap.core.remap import ParamSpace, RemapOptions, plan_stages, remap
+from brdfremap.core.scene import ProbeScene
+from analytic_adapter import TOY, ToyAdapter
+
+SCENE = ProbeScene(resolution=48)
+TRUTH = TOY.complete({"diffuse": (0.6, 0.3, 0.1), "specular": 0.8, "alpha": 0.15})
+
+
+def _setup():
+    adapter = ToyAdapter()
+    render = lambda p, lobe=None: adapter.render("toy", p, SCENE, lobe)  # noqa: E731
+    src = render(TRUTH)
+    lobes = {lobe: render(TRUTH, lobe) for lobe in ("diffuse", "specular")}
+    return adapter, render, src, lobes
+
+
+def test_param_space_roundtrip_linear_and_log():
+    base = TOY.complete({})
+    space = ParamSpace(TOY, base, ["diffuse", "alpha"])
+    assert space.dim == 4
+    u = space.encode(TRUTH)
+    assert np.allclose(u[3], np.log(0.15 / 0.01) / np.log(100))
+    back = space.decode(u)
+    assert np.allclose(back["diffuse"], TRUTH["diffuse"]) and np.isclose(back["alpha"], 0.15)
+    assert back["specular"] == base["specular"]  # not free: from base
+
+
+@pytest.mark.parametrize("scheme", ["one", "two", "three"])
+def test_identity_remap_recovers_parameters(scheme):
+    adapter, render, src, lobes = _setup()
+    base = TOY.complete({})
+    res = remap(TOY, render, src, lobes, base=base, free=TOY.fittable(base), options=RemapOptions(scheme=scheme))
+    assert res.scheme_used == scheme
+    assert res.relative_rmse < 1e-3
+    assert abs(res.params["alpha"] / 0.15 - 1) < 0.01
+    assert abs(res.params["specular"] / 0.8 - 1) < 0.01
+    assert np.allclose(res.params["diffuse"], (0.6, 0.3, 0.1), atol=2e-3)
+    assert res.reliable, res.reason
+    assert res.renders == adapter.calls - 3  # the three source renders are not target renders
+
+
+def test_two_stage_fits_specular_then_diffuse_on_lobe_images():
+    _, render, src, lobes = _setup()
+    base = TOY.complete({})
+    res = remap(TOY, render, src, lobes, base=base, free=TOY.fittable(base))
+    assert [s.name for s in res.stages] == ["specular", "diffuse"]
+    assert res.stages[0].free == ["specular", "alpha"] and res.stages[1].free == ["diffuse"]
+
+
+def test_two_stage_falls_back_when_source_has_no_lobes():
+    _, render, src, _ = _setup()
+    base = TOY.complete({})
+    res = remap(TOY, render, src, {"diffuse": None, "specular": None}, base=base, free=TOY.fittable(base))
+    assert res.scheme == "two" and res.scheme_used == "one"
+    assert "fell back to one-stage" in res.notes[0]
+
+
+def test_float32_images_get_a_nonzero_jacobian():
+    # scipy's default step (~1e-8) is below float32 resolution; ours must move the image.
+    _, render, src, lobes = _setup()
+    base = dict(TRUTH, alpha=0.3)
+    res = remap(TOY, render, src, lobes, base=base, free=["alpha"], options=RemapOptions(scheme="one", starts=1))
+    assert abs(res.params["alpha"] / 0.15 - 1) < 0.01
+
+
+def test_verdict_flags_a_pinned_bound_and_high_error():
+    _, render, src, lobes = _setup()
+    # Specular capped far below the truth: the fit must sit on the bound and say so.
+    capped = TOY.model_copy(update={"parameters": tuple(
+        p.model_copy(update={"upper": 0.2}) if p.name == "specular" else p for p in TOY.parameters)})
+    base = capped.complete({})
+    base["specular"] = 0.1
+    res = remap(capped, render, src, lobes, base=base, free=["specular", "alpha"],
+                options=RemapOptions(scheme="one"))
+    assert not res.reliable
+    assert "specular pinned at its upper bound" in res.reason
+    assert res.params["specular"] == pytest.approx(0.2, abs=1e-3)
+
+
+def test_verdict_flags_a_parameter_that_does_not_change_the_image():
+    _, render, src, lobes = _setup()
+    base = TOY.complete({})
+    res = remap(TOY, render, src, lobes, base=base, free=["alpha", "specular", "unused"],
+                options=RemapOptions(scheme="one"))
+    assert not res.reliable
+    assert "unused did not change the image" in res.reason
+
+
+def test_model_mismatch_is_named_as_such():
+    _, render, src, lobes = _setup()
+    base = TOY.complete({"diffuse": 0.0})
+    # Fit only the specular lobe to an image that also has a strong diffuse term.
+    res = remap(TOY, render, src, lobes, base=base, free=["specular", "alpha"], options=RemapOptions(scheme="one"))
+    assert not res.reliable
+    assert "above the 5% threshold" in res.reason
+
+
+def test_render_budget_stops_the_fit_at_the_best_point():
+    _, render, src, lobes = _setup()
+    base = TOY.complete({})
+    res = remap(TOY, render, src, lobes, base=base, free=TOY.fittable(base),
+                options=RemapOptions(scheme="one", max_renders_per_stage=6))
+    assert res.stages[0].renders == 6
+    assert "render budget" in res.stages[0].status
+    assert res.stages[0].error <= res.stages[0].start_error
+
+
+def test_bad_source_images_are_rejected_before_any_render():
+    _, render, src, lobes = _setup()
+    base = TOY.complete({})
+    with pytest.raises(OptimisationError, match="black"):
+        remap(TOY, render, np.zeros_like(src), base=base, free=["alpha"])
+    bad = src.copy()
+    bad[0, 0, 0] = np.nan
+    with pytest.raises(OptimisationError, match="NaN"):
+        remap(TOY, render, bad, base=base, free=["alpha"])
+    with pytest.raises(OptimisationError, match="`free`"):
+        remap(TOY, render, src, base=base, free=["nope"])
+
+
+def test_plan_stages_folds_a_missing_target_lobe_into_the_full_image():
+    from brdfremap.core.schemas import LobeSpec
+
+    conductor = TOY.model_copy(update={"lobes": {"diffuse": LobeSpec(empty=True),
+                                                 "specular": LobeSpec(params=("specular", "alpha"))}})
+    used, stages, _ = plan_stages("two", conductor, ["specular", "alpha"], {"diffuse": 1, "specular": 1})
+    assert used == "two"
+    assert stages == [("specular", None, ["specular", "alpha"], None)]

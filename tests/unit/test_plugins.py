@@ -1,0 +1,89 @@
+"""The plugin host: fresh manager per test, no global registry."""
+
+import types
+
+import pytest
+
+from brdfremap.core import hookimpl
+from brdfremap.core.errors import AdapterUnavailableError, ConfigError
+from brdfremap.core.plugins import collect_adapters, get_plugin_manager
+from analytic_adapter import ToyAdapter
+
+
+def _plugin(name, *adapters):
+    mod = types.ModuleType(name)
+
+    @hookimpl
+    def brdfremap_register_adapters(register):
+        for a in adapters:
+            register(a.name, a)
+
+    mod.brdfremap_register_adapters = brdfremap_register_adapters
+    return mod
+
+
+def test_registered_adapter_is_found_and_constructed_only_on_demand():
+    pm = get_plugin_manager(load_entrypoints=False, plugins=(_plugin("toyplug", ToyAdapter),))
+    reg = collect_adapters(pm)
+    assert reg.names() == ["toy"]
+    assert "toy" in reg.get("toy").models
+    assert isinstance(reg.create("toy"), ToyAdapter)
+
+
+def test_duplicate_names_are_rejected_naming_both_plugins():
+    pm = get_plugin_manager(load_entrypoints=False,
+                            plugins=(_plugin("first_pkg", ToyAdapter), _plugin("second_pkg", ToyAdapter)))
+    with pytest.raises(ConfigError) as e:
+        collect_adapters(pm)
+    assert "first_pkg" in str(e.value) and "second_pkg" in str(e.value)
+
+
+def test_misspelt_hook_fails_at_start_up_with_its_name():
+    mod = types.ModuleType("typo_pkg")
+
+    @hookimpl
+    def brdfremap_register_adaptors(register):  # misspelt
+        pass
+
+    mod.brdfremap_register_adaptors = brdfremap_register_adaptors
+    with pytest.raises(ConfigError, match="brdfremap_register_adaptors"):
+        get_plugin_manager(load_entrypoints=False, plugins=(mod,))
+
+
+def test_a_plugin_that_raises_is_listed_not_fatal():
+    mod = types.ModuleType("broken_pkg")
+
+    @hookimpl
+    def brdfremap_register_adapters(register):
+        raise RuntimeError("boom")
+
+    mod.brdfremap_register_adapters = brdfremap_register_adapters
+    reg = collect_adapters(get_plugin_manager(load_entrypoints=False, plugins=(mod, _plugin("ok", ToyAdapter))))
+    assert reg.names() == ["toy"]
+    assert any("boom" in v for v in reg.broken.values())
+
+
+def test_unavailable_adapter_says_why_and_how_to_install():
+    class Missing(ToyAdapter):
+        name = "missing"
+        install_hint = "pip install missing-renderer"
+
+        @classmethod
+        def unavailable_reason(cls):
+            return "the missing package is not installed"
+
+    reg = collect_adapters(get_plugin_manager(load_entrypoints=False, plugins=(_plugin("m", Missing),)))
+    with pytest.raises(AdapterUnavailableError, match="not installed; pip install missing-renderer"):
+        reg.create("missing")
+
+
+def test_unknown_adapter_lists_the_installed_ones():
+    reg = collect_adapters(get_plugin_manager(load_entrypoints=False, plugins=(_plugin("t", ToyAdapter),)))
+    with pytest.raises(ConfigError, match="unknown adapter 'cyclez' \\(installed: toy"):
+        reg.get("cyclez")
+
+
+def test_builtin_adapters_come_through_the_entry_point_group():
+    reg = collect_adapters(get_plugin_manager())
+    assert "mitsuba" in reg.names()
+    assert reg.get("mitsuba").plugin.startswith("brdf-remap")
