@@ -327,12 +327,16 @@ def _verdict(target, params, free, source, norm, render, err, options, counter, 
     J = stage.jacobian(u)
     labels = space.labels()
     col = np.linalg.norm(J, axis=0)
-    dead = [labels[j] for j in range(len(col)) if col[j] <= 1e-6 * max(col.max(), 1e-30)]
+    live = col > 1e-6 * max(col.max(), 1e-30)
+    dead = [labels[j] for j in range(len(col)) if not live[j]]
     cond = None
-    if dead:
-        reasons.append(f"{', '.join(dead)} did not change the image (ill-conditioned Jacobian)")
-    elif len(col) > 1:
-        s = np.linalg.svd(J / col, compute_uv=False)
+    if not live.any():
+        reasons.append("no fitted parameter changes the image (ill-conditioned Jacobian)")
+    elif dead:
+        # Harmless for the appearance (e.g. a specular level once metallic = 1), but the value is arbitrary.
+        notes.append(f"{', '.join(dead)} did not change the image at the solution: left where the fit put it")
+    if live.sum() > 1:
+        s = np.linalg.svd(J[:, live] / col[live], compute_uv=False)
         cond = float(s[0] / s[-1]) if s[-1] > 0 else math.inf
         if cond > options.cond_limit:
             reasons.append(f"ill-conditioned Jacobian (condition {cond:.2g}): parameters trade off against each other")

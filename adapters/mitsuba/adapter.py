@@ -101,7 +101,8 @@ class MitsubaAdapter(Adapter):
         except Exception as exc:
             raise RenderError(f"mitsuba cannot use variant {self.choice.variant!r}: {exc}") from exc
         self.mi = mi
-        self._scenes: OrderedDict[tuple, tuple[Any, Any, dict[str, str]]] = OrderedDict()
+        # key -> (scene, traverse handle, parameter -> traverse key, values currently set)
+        self._scenes: OrderedDict[tuple, tuple[Any, Any, dict[str, str], dict[str, Value]]] = OrderedDict()
 
     @classmethod
     def environment(cls) -> dict[str, Any]:
@@ -153,7 +154,7 @@ class MitsubaAdapter(Adapter):
                 if cand in handle:
                     keys[p.name] = cand
                     break
-        self._scenes[key] = (sc, handle, keys)
+        self._scenes[key] = (sc, handle, keys, dict(params))
         if len(self._scenes) > self.max_scenes:
             self._scenes.popitem(last=False)
         return self._scenes[key]
@@ -161,15 +162,17 @@ class MitsubaAdapter(Adapter):
     def render(self, model: str, params: dict[str, Value], scene: ProbeScene, lobe: str | None = None) -> np.ndarray:
         spec = self.models[model]
         p = spec.with_lobe(params, lobe)
-        sc, handle, keys = self._scene(model, p, scene)
+        sc, handle, keys, current = self._scene(model, p, scene)
         changed = False
         for name, key in keys.items():
-            if not spec.is_active(name, p):
+            if not spec.is_active(name, p) or current.get(name) == p[name]:
                 continue
             _, v = _traverse_value(model, name, p[name])
             handle[key] = list(v) if isinstance(v, tuple) else float(v)  # type: ignore[arg-type]
+            current[name] = p[name]
             changed = True
         if changed:
+            # Only when something moved: some BSDFs (roughplastic) redo costly set-up on update.
             handle.update()
         try:
             img = self.mi.render(sc, seed=scene.seed, spp=scene.spp)
