@@ -1,5 +1,5 @@
 # Two commands do all the set-up on a fresh Debian machine:
-#   make demo   - a real remap with its report and images (out/gold)
+#   make demo   - the main job: Mitsuba gold remapped to Blender Cycles' Principled BSDF (out/gold)
 #   make test   - the test suite
 # Both create .venv and install what they need; `system-deps` adds libLLVM 19 so Mitsuba
 # can use its fast llvm_ad_rgb variant (without it the tool falls back to scalar_rgb).
@@ -27,7 +27,7 @@ system-deps:
 	fi
 
 demo: system-deps $(STAMP)
-	$(VENV)/bin/remap --adapter mitsuba --model roughconductor --fix distribution=ggx \
+	$(VENV)/bin/remap --adapter cycles --model principled \
 	    --source configs/materials/gold.yaml --out out/gold
 
 test: system-deps $(STAMP)

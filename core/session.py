@@ -91,6 +91,7 @@ class Outcome:
     noise_floor: float
     source_renders: int
     adapters: dict[str, Any] = field(default_factory=dict)
+    noise: dict[str, float] = field(default_factory=dict)
 
 
 class _CachedRenderer:
@@ -137,7 +138,7 @@ def run(job: Job, registry: AdapterRegistry, adapters: dict[str, Adapter], progr
     if progress:
         progress("source", 0, float("nan"))
     source_image = src(job.source_params)
-    noise_floor = relative_rmse(source_image, src(job.source_params, scene=job.scene.with_(seed=job.scene.seed + 1)))
+    source_noise = relative_rmse(source_image, src(job.source_params, scene=job.scene.with_(seed=job.scene.seed + 1)))
     lobes: dict[str, np.ndarray | None] = {}
     for lobe in ("diffuse", "specular"):
         spec = job.source_spec.lobes.get(lobe)
@@ -148,14 +149,20 @@ def run(job: Job, registry: AdapterRegistry, adapters: dict[str, Adapter], progr
         else:
             lobes[lobe] = src(job.source_params, lobe)
     opts = job.options
-    threshold = max(opts.threshold, 2.0 * noise_floor)
+    threshold = max(opts.threshold, 2.0 * source_noise)
     if threshold != opts.threshold:
         opts = replace(opts, threshold=threshold)
     result = remap(job.target_spec, tgt, source_image, lobes, base=job.base, free=job.free, options=opts,
                    progress=progress)
+    # The error two renders of the same material show, source and target noise combined:
+    # n_x is the difference of two seeds (√2 σ_x), so the floor is sqrt((n_s² + n_t²) / 2).
+    target_noise = relative_rmse(result.target_image, tgt(result.params, scene=job.scene.with_(seed=job.scene.seed + 1)))
+    result.renders += 1
+    noise_floor = math.sqrt((source_noise**2 + target_noise**2) / 2)
     result.seconds = time.perf_counter() - t0
     info = {n: {"plugin": registry.get(n).plugin, **a.describe()} for n, a in adapters.items()}
-    return Outcome(job, result, source_image, noise_floor, src_cache.misses, info)
+    return Outcome(job, result, source_image, noise_floor, src_cache.misses, info,
+                   noise={"source": source_noise, "target": target_noise})
 
 
 def _finite_or_none(x: float | None) -> float | None:
@@ -185,6 +192,10 @@ def result_document(outcome: Outcome) -> dict[str, Any]:
             "perceptual": r.perceptual,
             "perceptual_metric": "mean ΔE_ITP over the object (1 ≈ just noticeable)",
             "noise_floor": outcome.noise_floor,
+            "noise_floor_definition": "relative RMSE expected between two renders of one material "
+                                      "(source and target noise, each from a second seed)",
+            "noise_source": outcome.noise.get("source"),
+            "noise_target": outcome.noise.get("target"),
             "jacobian_condition": _finite_or_none(r.jacobian_condition),
         },
         "renders": r.renders,

@@ -43,3 +43,13 @@ def mitsuba_adapter():
     a = MitsubaAdapter()
     yield a
     a.close()
+
+
+@pytest.fixture(scope="session")
+def cycles_adapter():
+    from brdfremap.adapters.cycles.adapter import CyclesAdapter
+
+    need_adapter(CyclesAdapter)
+    a = CyclesAdapter()
+    yield a
+    a.close()

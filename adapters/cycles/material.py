@@ -1,0 +1,67 @@
+"""How each model maps onto Blender shader nodes. Shared by the worker (which applies it
+with bpy) and the adapter (which writes the Python snippet); imports no bpy."""
+
+from __future__ import annotations
+
+from brdfremap.core.schemas import Value
+
+# model -> (node type, {param: node input name}, {choice param: node property})
+NODES: dict[str, tuple[str, dict[str, str], dict[str, str]]] = {
+    "principled": ("ShaderNodeBsdfPrincipled", {
+        "base_color": "Base Color", "metallic": "Metallic", "roughness": "Roughness", "ior": "IOR",
+        "specular_ior_level": "Specular IOR Level", "specular_tint": "Specular Tint",
+        "coat_weight": "Coat Weight", "coat_roughness": "Coat Roughness",
+    }, {"distribution": "distribution"}),
+    "glossy": ("ShaderNodeBsdfGlossy", {"color": "Color", "roughness": "Roughness"}, {"distribution": "distribution"}),
+    "diffuse": ("ShaderNodeBsdfDiffuse", {"color": "Color", "roughness": "Roughness"}, {}),
+    "metallic": ("ShaderNodeBsdfMetallic", {"ior": "IOR", "extinction": "Extinction", "roughness": "Roughness"},
+                 {"distribution": "distribution"}),
+}
+# Node properties set once, not parameters.
+FIXED_PROPS: dict[str, dict[str, str]] = {"metallic": {"fresnel_type": "PHYSICAL_CONDUCTOR"}}
+
+
+# RGB parameters on 3-float vector sockets rather than RGBA colour sockets.
+VECTOR_SOCKETS = {("metallic", "ior"), ("metallic", "extinction")}
+
+
+def socket_value(model: str, name: str, v: Value):
+    """Colour sockets take RGBA, vector sockets three floats."""
+    if isinstance(v, (tuple, list)):
+        return tuple(v) if (model, name) in VECTOR_SOCKETS else (*v, 1.0)
+    return v
+
+
+def enum_value(v: str) -> str:
+    return v.upper()
+
+
+def python_snippet(model: str, params: dict[str, Value], name: str = "brdf-remap") -> str:
+    """A short bpy script that recreates the material."""
+    node_type, inputs, props = NODES[model]
+    lines = [
+        "# Recreates the remapped material in Blender (Cycles). Run in Blender's Python console",
+        "# or with: blender --background --python this_file.py",
+        "import bpy",
+        "",
+        f"mat = bpy.data.materials.new({name!r})",
+        "nodes, links = mat.node_tree.nodes, mat.node_tree.links",
+        "for n in list(nodes):",
+        "    if n.type != 'OUTPUT_MATERIAL':",
+        "        nodes.remove(n)",
+        f"bsdf = nodes.new({node_type!r})",
+    ]
+    for prop, value in FIXED_PROPS.get(model, {}).items():
+        lines.append(f"bsdf.{prop} = {value!r}")
+    for pname, prop in props.items():
+        lines.append(f"bsdf.{prop} = {enum_value(str(params[pname]))!r}")
+    for pname, sock in inputs.items():
+        v = socket_value(model, pname, params[pname])
+        shown = "(" + ", ".join(f"{x:.6g}" for x in v) + ")" if isinstance(v, tuple) else f"{v:.6g}"
+        lines.append(f"bsdf.inputs[{sock!r}].default_value = {shown}")
+    lines += [
+        "out = next(n for n in nodes if n.type == 'OUTPUT_MATERIAL')",
+        "links.new(bsdf.outputs[0], out.inputs['Surface'])",
+        "",
+    ]
+    return "\n".join(lines)

@@ -1,0 +1,79 @@
+"""Blender Cycles material models as data (no bpy import here).
+
+Blender's roughness r is the square root of the microfacet α (α = r²)."""
+
+from __future__ import annotations
+
+from brdfremap.core.schemas import LobeSpec, ModelSpec, ParamSpec
+
+# Lobes are isolated natively by render passes (Diffuse Direct x Diffuse Color, Glossy
+# Direct x Glossy Color), so no overrides: editing the material to hide a lobe changes the
+# other one (Specular IOR Level 0 shifts the diffuse term by about 10 %). Base Color shapes
+# both lobes: it is the diffuse albedo and, through Metallic, the metal's specular colour.
+PASS_LOBES_PRINCIPLED = {
+    "diffuse": LobeSpec(params=("base_color",)),
+    "specular": LobeSpec(params=("base_color", "metallic", "roughness", "ior", "specular_ior_level", "specular_tint",
+                                 "coat_weight", "coat_roughness")),
+}
+
+
+def _unit(name, default, fit=True, desc="", upper=1.0):
+    return ParamSpec(name=name, kind="scalar", lower=0.0, upper=upper, default=default, fit=fit, description=desc)
+
+
+PRINCIPLED = ModelSpec(
+    name="principled",
+    description="Principled BSDF (multiscatter GGX by default). Lobes by render passes.",
+    parameters=(
+        ParamSpec(name="distribution", kind="choice", default="multi_ggx", choices=("multi_ggx", "ggx"),
+                  description="Microfacet distribution of the Principled BSDF."),
+        ParamSpec(name="base_color", kind="rgb", default=(0.8, 0.8, 0.8), description="Base Color."),
+        _unit("metallic", 0.0, desc="Metallic."),
+        _unit("roughness", 0.5, desc="Roughness (α = roughness²)."),
+        ParamSpec(name="ior", kind="scalar", lower=1.0, upper=3.0, default=1.5, fit=False,
+                  description="IOR of the dielectric specular (use Specular IOR Level to fit F0)."),
+        _unit("specular_ior_level", 0.5, upper=1.0, desc="Specular IOR Level (0.5 = the IOR as given)."),
+        ParamSpec(name="specular_tint", kind="rgb", default=(1.0, 1.0, 1.0), fit=False, description="Specular Tint."),
+        _unit("coat_weight", 0.0, fit=False, desc="Coat Weight."),
+        _unit("coat_roughness", 0.03, fit=False, desc="Coat Roughness."),
+    ),
+    lobes=PASS_LOBES_PRINCIPLED,
+)
+
+GLOSSY = ModelSpec(
+    name="glossy",
+    description="Glossy BSDF: a microfacet lobe with a constant colour (no Fresnel).",
+    parameters=(
+        ParamSpec(name="distribution", kind="choice", default="ggx",
+                  choices=("beckmann", "ggx", "ashikhmin_shirley", "multi_ggx"), description="Distribution."),
+        ParamSpec(name="color", kind="rgb", default=(0.8, 0.8, 0.8), description="Color."),
+        _unit("roughness", 0.3, desc="Roughness (α = roughness²)."),
+    ),
+    lobes={"diffuse": LobeSpec(empty=True), "specular": LobeSpec(params=("color", "roughness"))},
+)
+
+DIFFUSE = ModelSpec(
+    name="diffuse",
+    description="Diffuse BSDF (Lambertian at roughness 0).",
+    parameters=(
+        ParamSpec(name="color", kind="rgb", default=(0.8, 0.8, 0.8), description="Color."),
+        _unit("roughness", 0.0, fit=False, desc="Oren-Nayar roughness."),
+    ),
+    lobes={"diffuse": LobeSpec(params=("color", "roughness")), "specular": LobeSpec(empty=True)},
+)
+
+METALLIC = ModelSpec(
+    name="metallic",
+    description="Metallic BSDF with the physical conductor Fresnel (complex IOR per channel).",
+    parameters=(
+        ParamSpec(name="distribution", kind="choice", default="multi_ggx", choices=("beckmann", "ggx", "multi_ggx"),
+                  description="Distribution."),
+        ParamSpec(name="ior", kind="rgb", lower=0.0, upper=8.0, default=(0.2, 0.4, 1.4), description="IOR (eta)."),
+        ParamSpec(name="extinction", kind="rgb", lower=0.0, upper=10.0, default=(3.9, 2.4, 1.6),
+                  description="Extinction (k)."),
+        _unit("roughness", 0.3, desc="Roughness (α = roughness²)."),
+    ),
+    lobes={"diffuse": LobeSpec(empty=True), "specular": LobeSpec(params=("ior", "extinction", "roughness"))},
+)
+
+MODELS = {m.name: m for m in (PRINCIPLED, GLOSSY, DIFFUSE, METALLIC)}

@@ -1,0 +1,229 @@
+"""The Cycles worker: one Blender (bpy) process serving render requests as JSON lines.
+
+Protocol: one JSON object per line on stdin, one JSON answer per line on the protocol
+channel (the process's original stdout; Blender's own prints are sent to stderr so they
+cannot corrupt it). Requests: {"op": "render", "model", "params", "scene", "out"},
+{"op": "save_blend", "model", "params", "path"}, {"op": "ping"}, {"op": "quit"}.
+Run as ``python -m brdfremap.adapters.cycles.worker``; it exits when stdin closes."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+import time
+import traceback
+
+
+class BlenderState:
+    def __init__(self):
+        import bpy
+
+        self.bpy = bpy
+        self.scene_key = None
+        self.materials = {}
+        self.probe = None
+
+    # -- scene -------------------------------------------------------------------------
+    def setup_scene(self, sc_json: dict) -> None:
+        key = json.dumps(sc_json, sort_keys=True)
+        if key == self.scene_key:
+            return
+        bpy = self.bpy
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        self.materials = {}
+        scene = bpy.context.scene
+        r = scene.render
+        r.engine = "CYCLES"
+        r.resolution_x = r.resolution_y = sc_json["resolution"]
+        r.resolution_percentage = 100
+        r.use_compositing = False
+        r.use_sequencer = False
+        r.film_transparent = False
+        cy = scene.cycles
+        cy.device = "CPU"
+        cy.samples = sc_json["spp"]
+        cy.seed = sc_json["seed"]
+        cy.use_animated_seed = False
+        cy.use_denoising = False
+        cy.use_adaptive_sampling = False
+        cy.pixel_filter_type = "BOX"
+        cy.filter_width = 1.0
+        # Direct lighting only: no bounces after the camera ray's first hit.
+        for attr in ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces",
+                     "volume_bounces", "transparent_max_bounces"):
+            setattr(cy, attr, 0)
+        cy.caustics_reflective = cy.caustics_refractive = False
+        scene.view_settings.view_transform = "Standard"
+        scene.view_settings.look = "None"
+        scene.view_settings.exposure = 0.0
+        scene.view_settings.gamma = 1.0
+        world = bpy.data.worlds.new("black")
+        scene.world = world
+        world.use_nodes = True
+        bg = world.node_tree.nodes.get("Background")
+        bg.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+        bg.inputs["Strength"].default_value = 0.0
+        self._camera(scene, sc_json["camera"])
+        self._light(scene, sc_json["light"])
+        self._sphere(scene, sc_json["sphere"])
+        vl = scene.view_layers[0]
+        for attr in ("use_pass_diffuse_direct", "use_pass_diffuse_color", "use_pass_glossy_direct",
+                     "use_pass_glossy_color"):
+            setattr(vl, attr, True)
+        ims = r.image_settings
+        ims.media_type = "MULTI_LAYER_IMAGE"  # Blender 5.0: before the file format
+        ims.file_format = "OPEN_EXR_MULTILAYER"
+        ims.color_depth = "32"
+        ims.exr_codec = "NONE"
+        r.use_file_extension = False
+        self.scene_key = key
+
+    def _camera(self, scene, cam: dict) -> None:
+        from mathutils import Vector
+
+        bpy = self.bpy
+        data = bpy.data.cameras.new("probe-camera")
+        data.sensor_fit = "HORIZONTAL"
+        data.angle = math.radians(cam["fov"])
+        obj = bpy.data.objects.new("probe-camera", data)
+        tx, ty, tz = cam["target"]
+        obj.location = (tx, ty, tz + cam["distance"])
+        direction = Vector(cam["target"]) - obj.location
+        obj.rotation_mode = "QUATERNION"
+        obj.rotation_quaternion = direction.to_track_quat("-Z", "Y")
+        scene.collection.objects.link(obj)
+        scene.camera = obj
+
+    def _light(self, scene, light: dict) -> None:
+        bpy = self.bpy
+        data = bpy.data.lights.new("probe-light", "POINT")
+        # Blender's point-light power in W is 4π × the radiant intensity in W/sr.
+        data.energy = 4.0 * math.pi * light["intensity"]
+        data.shadow_soft_size = 0.0
+        data.color = (1.0, 1.0, 1.0)
+        if hasattr(data, "use_soft_falloff"):
+            data.use_soft_falloff = False
+        obj = bpy.data.objects.new("probe-light", data)
+        t, p, rr = math.radians(light["theta"]), math.radians(light["phi"]), light["r"]
+        obj.location = (rr * math.sin(t) * math.cos(p), rr * math.sin(t) * math.sin(p), rr * math.cos(t))
+        scene.collection.objects.link(obj)
+
+    def _sphere(self, scene, sphere: dict) -> None:
+        """An exact sphere: one point of a point cloud (Cycles intersects it analytically)."""
+        bpy = self.bpy
+        mesh = bpy.data.meshes.new("probe-centre")
+        mesh.vertices.add(1)
+        mesh.vertices[0].co = (0.0, 0.0, 0.0)
+        mesh.update()
+        obj = bpy.data.objects.new("probe", mesh)
+        obj.location = tuple(sphere["center"])
+        scene.collection.objects.link(obj)
+        tree = bpy.data.node_groups.new("probe-sphere", "GeometryNodeTree")
+        tree.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
+        tree.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+        gin, gout = tree.nodes.new("NodeGroupInput"), tree.nodes.new("NodeGroupOutput")
+        points = tree.nodes.new("GeometryNodeMeshToPoints")
+        points.inputs["Radius"].default_value = sphere["radius"]
+        self.set_material = tree.nodes.new("GeometryNodeSetMaterial")
+        tree.links.new(gin.outputs[0], points.inputs["Mesh"])
+        tree.links.new(points.outputs[0], self.set_material.inputs["Geometry"])
+        tree.links.new(self.set_material.outputs[0], gout.inputs[0])
+        mod = obj.modifiers.new("probe-sphere", "NODES")
+        mod.node_group = tree
+        self.probe = obj
+
+    # -- materials ---------------------------------------------------------------------
+    def material(self, model: str, params: dict):
+        from brdfremap.adapters.cycles.material import FIXED_PROPS, NODES, enum_value, socket_value
+
+        node_type, inputs, props = NODES[model]
+        if model not in self.materials:
+            mat = self.bpy.data.materials.new(f"brdf-remap {model}")
+            mat.use_nodes = True
+            nodes = mat.node_tree.nodes
+            for n in list(nodes):
+                if n.type != "OUTPUT_MATERIAL":
+                    nodes.remove(n)
+            bsdf = nodes.new(node_type)
+            for prop, value in FIXED_PROPS.get(model, {}).items():
+                setattr(bsdf, prop, value)
+            out = next(n for n in nodes if n.type == "OUTPUT_MATERIAL")
+            mat.node_tree.links.new(bsdf.outputs[0], out.inputs["Surface"])
+            self.materials[model] = (mat, bsdf)
+        mat, bsdf = self.materials[model]
+        for pname, prop in props.items():
+            value = enum_value(params[pname])
+            if getattr(bsdf, prop) != value:
+                setattr(bsdf, prop, value)
+        for pname, sock in inputs.items():
+            bsdf.inputs[sock].default_value = socket_value(model, pname, params[pname])
+        return mat
+
+    # -- requests ----------------------------------------------------------------------
+    def render(self, req: dict) -> dict:
+        t0 = time.perf_counter()
+        self.setup_scene(req["scene"])
+        mat = self.material(req["model"], req["params"])
+        if self.set_material.inputs["Material"].default_value != mat:
+            self.set_material.inputs["Material"].default_value = mat
+        scene = self.bpy.context.scene
+        scene.render.filepath = req["out"]
+        self.bpy.ops.render.render(write_still=True)
+        if not os.path.exists(req["out"]):
+            raise RuntimeError(f"Blender did not write {req['out']}")
+        return {"seconds": time.perf_counter() - t0}
+
+    def save_blend(self, req: dict) -> dict:
+        mat = self.material(req["model"], req["params"])
+        mat.name = req.get("name", mat.name)
+        self.bpy.data.libraries.write(req["path"], {mat}, fake_user=True)
+        return {}
+
+
+def main() -> int:
+    proto = os.fdopen(os.dup(1), "w", buffering=1, encoding="utf-8")
+    os.dup2(2, 1)  # Blender prints progress on stdout: keep it off the protocol channel
+    sys.stdout = sys.stderr
+
+    def send(msg: dict) -> None:
+        proto.write(json.dumps(msg) + "\n")
+        proto.flush()
+
+    try:
+        import bpy
+
+        state = BlenderState()
+        send({"ok": True, "ready": True, "blender": bpy.app.version_string, "pid": os.getpid()})
+    except Exception as exc:
+        send({"ok": False, "error": f"cannot start Blender: {type(exc).__name__}: {exc}"})
+        return 1
+    for line in sys.stdin:
+        if not line.strip():
+            continue
+        req = None
+        try:
+            req = json.loads(line)
+            op = req.get("op")
+            if op == "quit":
+                send({"id": req.get("id"), "ok": True})
+                break
+            if op == "ping":
+                result = {}
+            elif op == "render":
+                result = state.render(req)
+            elif op == "save_blend":
+                result = state.save_blend(req)
+            else:
+                raise ValueError(f"unknown op {op!r}")
+            send({"id": req.get("id"), "ok": True, **result})
+        except Exception as exc:
+            traceback.print_exc()
+            send({"id": req.get("id") if isinstance(req, dict) else None, "ok": False,
+                  "error": f"{type(exc).__name__}: {exc}"})
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,162 @@
+"""A persistent worker process that answers JSON lines: pay a renderer's start-up once.
+
+Renderer-agnostic: adapters (Cycles, external renderers) own one. A crash or a hang becomes
+a RenderError carrying the tail of the worker's stderr; a dead worker is restarted once."""
+
+from __future__ import annotations
+
+import atexit
+import collections
+import json
+import os
+import queue
+import signal
+import subprocess
+import threading
+import time
+import weakref
+from typing import Any
+
+from .errors import RenderError
+
+_LIVE: "weakref.WeakSet[JsonLinesWorker]" = weakref.WeakSet()
+
+
+@atexit.register
+def _close_all() -> None:
+    for w in list(_LIVE):
+        w.close()
+
+
+class JsonLinesWorker:
+    def __init__(self, argv: list[str], *, name: str, env: dict[str, str] | None = None,
+                 start_timeout: float = 120.0, request_timeout: float = 600.0, cwd: str | None = None):
+        self.argv, self.name, self.env, self.cwd = list(argv), name, env, cwd
+        self.start_timeout, self.request_timeout = start_timeout, request_timeout
+        self.proc: subprocess.Popen | None = None
+        self.hello: dict[str, Any] = {}
+        self.restarts = 0
+        self._lines: queue.Queue = queue.Queue()
+        self._stderr: collections.deque[str] = collections.deque(maxlen=40)
+        self._next_id = 0
+        self._lock = threading.Lock()
+        _LIVE.add(self)
+
+    # -- lifecycle ---------------------------------------------------------------------
+    def start(self) -> dict[str, Any]:
+        self._lines = queue.Queue()
+        self._stderr.clear()
+        try:
+            self.proc = subprocess.Popen(
+                self.argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                bufsize=1, env=self.env, cwd=self.cwd, start_new_session=True)
+        except OSError as exc:
+            raise RenderError(f"{self.name}: cannot start {self.argv[0]!r}: {exc}") from exc
+        threading.Thread(target=self._pump_answers, args=(self.proc.stdout, self._lines), daemon=True).start()
+        threading.Thread(target=self._pump_stderr, args=(self.proc.stderr, self._stderr), daemon=True).start()
+        self.hello = self._read(self.start_timeout, "start")
+        if not self.hello.get("ok"):
+            err = self.hello.get("error", "no greeting")
+            self.close()
+            raise RenderError(f"{self.name}: worker failed to start: {err}{self._tail()}")
+        return self.hello
+
+    @staticmethod
+    def _pump_answers(stream, lines: queue.Queue) -> None:
+        for line in stream:
+            lines.put(line.rstrip("\n"))
+        lines.put(None)  # end of stream: the worker is gone
+
+    @staticmethod
+    def _pump_stderr(stream, tail: collections.deque) -> None:
+        for line in stream:
+            tail.append(line.rstrip("\n"))
+
+    def alive(self) -> bool:
+        return self.proc is not None and self.proc.poll() is None
+
+    def close(self) -> None:
+        proc, self.proc = self.proc, None
+        if proc is None:
+            return
+        try:
+            if proc.poll() is None:
+                try:
+                    proc.stdin.write(json.dumps({"op": "quit"}) + "\n")
+                    proc.stdin.flush()
+                    proc.stdin.close()
+                    proc.wait(timeout=5)
+                except (OSError, ValueError, subprocess.TimeoutExpired):
+                    self._kill(proc)
+        finally:
+            for s in (proc.stdin, proc.stdout, proc.stderr):
+                try:
+                    s.close()
+                except Exception:
+                    pass
+
+    @staticmethod
+    def _kill(proc: subprocess.Popen) -> None:
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)  # the whole group: renderers spawn helpers
+        except (ProcessLookupError, PermissionError):
+            proc.kill()
+        proc.wait()
+
+    # -- requests ----------------------------------------------------------------------
+    def _tail(self, n: int = 8) -> str:
+        lines = [line for line in self._stderr if line.strip()][-n:]
+        return ("\n  stderr: " + "\n  stderr: ".join(lines)) if lines else ""
+
+    def _read(self, timeout: float, what: str) -> dict[str, Any]:
+        deadline = time.monotonic() + timeout
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                if self.proc is not None:
+                    self._kill(self.proc)
+                raise RenderError(f"{self.name}: no answer to {what} within {timeout:.0f} s (worker killed){self._tail()}")
+            try:
+                line = self._lines.get(timeout=min(left, 0.5))
+            except queue.Empty:
+                continue
+            if line is None:
+                code = self.proc.wait() if self.proc else None
+                raise _WorkerDied(f"{self.name}: worker exited (code {code}) during {what}{self._tail()}")
+            line = line.strip()
+            if not line.startswith("{"):
+                self._stderr.append(line)  # stray output: keep it for the error message
+                continue
+            try:
+                return json.loads(line)
+            except json.JSONDecodeError:
+                self._stderr.append(line)
+
+    def request(self, msg: dict[str, Any], timeout: float | None = None) -> dict[str, Any]:
+        """Send one request and wait for its answer. A dead worker is restarted once."""
+        with self._lock:
+            for attempt in (0, 1):
+                if not self.alive():
+                    if self.hello:  # it ran before: this is a restart
+                        self.restarts += 1
+                    self.start()
+                self._next_id += 1
+                payload = {"id": self._next_id, **msg}
+                try:
+                    self.proc.stdin.write(json.dumps(payload) + "\n")
+                    self.proc.stdin.flush()
+                    answer = self._read(timeout or self.request_timeout, msg.get("op", "request"))
+                except (_WorkerDied, BrokenPipeError, OSError) as exc:
+                    self.proc = None
+                    if attempt:
+                        raise RenderError(str(exc) if isinstance(exc, _WorkerDied) else
+                                          f"{self.name}: worker pipe broke: {exc}{self._tail()}") from None
+                    continue
+                if not answer.get("ok"):
+                    raise RenderError(f"{self.name}: {answer.get('error', 'failed')}{self._tail(4)}")
+                return answer
+        raise RenderError(f"{self.name}: worker unavailable")
+
+
+class _WorkerDied(RenderError):
+    pass
