@@ -44,6 +44,8 @@ def _remap_parser() -> argparse.ArgumentParser:
                    help="hold a target parameter at a value (repeatable), e.g. --fix distribution=ggx")
     p.add_argument("--method", choices=("trf", "dogbox"), default="trf",
                    help="least-squares method (default trf, the paper's Trust Region Reflective)")
+    p.add_argument("--coarse", type=int, default=32, metavar="N",
+                   help="resolution of the coarse level where most iterations run (default 32; 0: off)")
     p.add_argument("--starts", type=int, default=4, help="initial points tried per stage (default 4)")
     p.add_argument("--threshold", type=float, default=0.05,
                    help="relative RMSE above which a result is flagged unreliable (default 0.05)")
@@ -124,7 +126,10 @@ def cmd_remap(args: argparse.Namespace) -> int:
                           f"{', '.join(sorted(entry.models))})", field="--model")
     spec = entry.models[args.model]
     fixed = dict(parse_fix(f, spec) for f in args.fix)
-    options = RemapOptions(scheme=args.scheme, starts=args.starts, threshold=args.threshold, method=args.method)
+    if args.coarse < 0 or 0 < args.coarse < 8:
+        raise ConfigError("must be 0 (off) or at least 8", field="--coarse")
+    options = RemapOptions(scheme=args.scheme, starts=args.starts, threshold=args.threshold, method=args.method,
+                           coarse_resolution=args.coarse or None)
     job = prepare(registry, source, str(args.source), args.adapter, args.model, scene, fixed, options)
     out = Path(args.out)
     if out.exists() and not out.is_dir():

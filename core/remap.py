@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable, Literal
 
 import numpy as np
@@ -34,6 +34,11 @@ class RemapOptions:
     starts: int = 4
     """Initial points tried per stage (the defaults plus a low-discrepancy spread over the
     scalar parameters); the best one starts the fit. 1 disables multi-start."""
+    coarse_resolution: int | None = 32
+    """Resolution of the coarse level where most iterations happen (used when the scene's
+    resolution is at least twice it; None: one level). Renders cost about their pixel count."""
+    fine_steps: int = 3
+    """With a coarse level: renders allowed at full resolution beyond one Jacobian, per stage."""
     max_renders_per_stage: int = 80
     ftol: float = 1e-4
     xtol: float = 1e-4
@@ -96,6 +101,15 @@ class ParamSpace:
         return [sl.start for name, sl in self.slices.items() if self.spec.param(name).kind == "scalar"]
 
 
+@dataclass(frozen=True)
+class Level:
+    """One resolution of the problem: the target's render function and the source images."""
+
+    render: RenderFn
+    source: np.ndarray
+    source_lobes: dict[str, np.ndarray | None]
+
+
 @dataclass
 class StageResult:
     name: str
@@ -106,6 +120,7 @@ class StageResult:
     error: float
     status: str
     seconds: float
+    resolution: int = 0
 
 
 @dataclass
@@ -136,8 +151,9 @@ class _Stage:
     """One least-squares fit against one source image, counting renders and keeping the best point."""
 
     def __init__(self, name, lobe, space: ParamSpace, render: RenderFn, source: np.ndarray, norm: float,
-                 options: RemapOptions, progress: ProgressFn | None, counter: list[int]):
+                 options: RemapOptions, progress: ProgressFn | None, counter: list[int], polish: bool = False):
         self.name, self.lobe, self.space, self.render = name, lobe, space, render
+        self.polish = polish
         self.source = np.asarray(source, dtype=np.float64).ravel()
         self.norm, self.options, self.progress, self.counter = norm, options, progress, counter
         self.renders = 0
@@ -204,9 +220,10 @@ class _Stage:
             status = "converged" if res.status > 0 else f"stopped: {res.message}"
         except _BudgetExhausted:
             start_err = start_err if "start_err" in locals() else self.best_err
-            status = f"stopped at the render budget ({self.options.max_renders_per_stage})"
+            status = (f"converged (polished from the coarse optimum in {self.renders} renders)" if self.polish
+                      else f"stopped at the render budget ({self.options.max_renders_per_stage})")
         self.result = StageResult(self.name, self.lobe, self.space.free, self.renders, start_err, self.best_err,
-                                  status, time.perf_counter() - t0)
+                                  status, time.perf_counter() - t0, int(math.isqrt(self.source.size // 3)))
         return self.best_u
 
 
@@ -232,15 +249,20 @@ def plan_stages(scheme: Scheme, target: ModelSpec, free: list[str], source_lobes
         return "one", [("all", None, free, None)], notes
     stages = []
     empty = [lobe for lobe in ("specular", "diffuse") if target.lobes[lobe].empty]
+    fitted: set[str] = set()
     for lobe in ("specular", "diffuse"):
         spec = target.lobes[lobe]
         if spec.empty:
             continue
         params = [p for p in free if p in spec.params]
         # A lobe the target lacks is folded into the other one: fit it against the full image.
-        src_key = None if empty else lobe
-        stages.append((lobe, lobe if not empty else None, params, src_key))
-    leftover = [p for p in free if not any(p in s[2] for s in stages)]
+        # A parameter the first stage already fitted shapes both lobes (Base Color is also a
+        # metal's specular colour): refitting it on one lobe alone would undo the other, so
+        # such a stage matches the full image with the first stage's parameters held.
+        isolate = not empty and not (fitted & set(params))
+        stages.append((lobe, lobe if isolate else None, params, lobe if isolate else None))
+        fitted |= set(params)
+    leftover = [p for p in free if p not in fitted]
     if leftover and stages:
         stages[0] = (stages[0][0], stages[0][1], stages[0][2] + leftover, stages[0][3])
     if scheme == "three":
@@ -258,11 +280,14 @@ def remap(
     free: list[str],
     options: RemapOptions = RemapOptions(),
     progress: ProgressFn | None = None,
+    coarse: "Level | None" = None,
 ) -> RemapResult:
     """Fit ``free`` parameters of ``target`` (others as in ``base``) so ``render`` matches ``source``.
 
     ``source_lobes`` holds the source's diffuse-only and specular-only images (None where
-    the source cannot isolate a lobe; an all-zero image where it has no such lobe)."""
+    the source cannot isolate a lobe; an all-zero image where it has no such lobe).
+    ``coarse`` (render, source, source lobes at a lower resolution) moves most iterations
+    to cheap renders; each stage then finishes at full resolution from the coarse optimum."""
     t0 = time.perf_counter()
     source = np.asarray(source, dtype=np.float32)
     if source.ndim != 3 or source.shape[2] != 3:
@@ -281,17 +306,28 @@ def remap(
     counter = [0]
     params = dict(base)
     results: list[StageResult] = []
-    last_stage: _Stage | None = None
     for name, lobe, stage_free, src_key in stages:
         if not stage_free:
             continue
         space = ParamSpace(target, params, stage_free)
+        if coarse is not None:
+            c_stage = _Stage(f"{name}@{coarse.source.shape[0]}px", lobe, space, coarse.render,
+                             coarse.source if src_key is None else coarse.source_lobes[src_key],
+                             float(np.linalg.norm(coarse.source.astype(np.float64))), options, progress, counter)
+            params = space.decode(c_stage.run(space.encode(params)))
+            results.append(c_stage.result)
+            gained = c_stage.result.start_error - c_stage.result.error
+            if gained <= 0.01 * c_stage.result.start_error:
+                continue  # nothing to do at this stage: no full-resolution pass either
+            # Finish at full resolution from the coarse optimum: one Jacobian and a few steps.
+            stage_opts = replace(options, starts=1, max_renders_per_stage=space.dim + 1 + options.fine_steps)
+            space = ParamSpace(target, params, stage_free)
+        else:
+            stage_opts = options
         src = source if src_key is None else source_lobes[src_key]
-        stage = _Stage(name, lobe, space, render, src, norm, options, progress, counter)
-        u_best = stage.run(space.encode(params))
-        params = space.decode(u_best)
+        stage = _Stage(name, lobe, space, render, src, norm, stage_opts, progress, counter, polish=coarse is not None)
+        params = space.decode(stage.run(space.encode(params)))
         results.append(stage.result)
-        last_stage = stage
 
     final = np.asarray(render(params, None), dtype=np.float32)
     counter[0] += 1
@@ -299,8 +335,12 @@ def remap(
     if progress:
         progress("final", counter[0], err)
 
-    reasons, cond = _verdict(target, params, free, source, norm, render, err, options, counter, notes)
-    if len(reasons) == 1 and err > options.threshold and all(r.status == "converged" for r in results):
+    # The verdict's Jacobian (conditioning, bounds, joint step) is taken at the coarse level when
+    # there is one: it describes the problem as well, at a fraction of the renders.
+    v = coarse or Level(render, source, source_lobes)
+    v_norm = float(np.linalg.norm(v.source.astype(np.float64)))
+    reasons, cond = _verdict(target, params, free, v.source, v_norm, v.render, err, options, counter, notes)
+    if len(reasons) == 1 and err > options.threshold and all(r.status.startswith("converged") for r in results):
         reasons[0] += (" although the fit converged with no parameter pinned and a well-conditioned Jacobian:"
                        " a model mismatch (the closest this target model gets), not a failed fit")
     return RemapResult(

@@ -23,7 +23,7 @@ from .imageio import write_exr, write_previews
 from .metrics import error_map, relative_rmse
 from .plugins import AdapterRegistry
 from .protocol import Adapter, check_image
-from .remap import ProgressFn, RemapOptions, RemapResult, remap
+from .remap import Level, ProgressFn, RemapOptions, RemapResult, remap
 from .scene import ProbeScene
 from .schemas import Material, ModelSpec, Value
 
@@ -137,23 +137,19 @@ def run(job: Job, registry: AdapterRegistry, adapters: dict[str, Adapter], progr
     tgt = _CachedRenderer(adapters[job.target_adapter], job.target_adapter, job.target_model, job.scene, tgt_cache)
     if progress:
         progress("source", 0, float("nan"))
-    source_image = src(job.source_params)
+    source_image, lobes = _source_images(job, src, job.scene)
     source_noise = relative_rmse(source_image, src(job.source_params, scene=job.scene.with_(seed=job.scene.seed + 1)))
-    lobes: dict[str, np.ndarray | None] = {}
-    for lobe in ("diffuse", "specular"):
-        spec = job.source_spec.lobes.get(lobe)
-        if spec is None:
-            lobes[lobe] = None
-        elif spec.empty:
-            lobes[lobe] = np.zeros_like(source_image)
-        else:
-            lobes[lobe] = src(job.source_params, lobe)
     opts = job.options
     threshold = max(opts.threshold, 2.0 * source_noise)
     if threshold != opts.threshold:
         opts = replace(opts, threshold=threshold)
+    coarse = None
+    if opts.coarse_resolution and 2 * opts.coarse_resolution <= job.scene.resolution:
+        small = job.scene.with_(resolution=opts.coarse_resolution)
+        c_src, c_lobes = _source_images(job, src, small)
+        coarse = Level(lambda p, lobe=None: tgt(p, lobe, scene=small), c_src, c_lobes)
     result = remap(job.target_spec, tgt, source_image, lobes, base=job.base, free=job.free, options=opts,
-                   progress=progress)
+                   progress=progress, coarse=coarse)
     # The error two renders of the same material show, source and target noise combined:
     # n_x is the difference of two seeds (√2 σ_x), so the floor is sqrt((n_s² + n_t²) / 2).
     target_noise = relative_rmse(result.target_image, tgt(result.params, scene=job.scene.with_(seed=job.scene.seed + 1)))
@@ -167,6 +163,21 @@ def run(job: Job, registry: AdapterRegistry, adapters: dict[str, Adapter], progr
 
 def _finite_or_none(x: float | None) -> float | None:
     return x if x is not None and math.isfinite(x) else None
+
+
+def _source_images(job: Job, src: _CachedRenderer, scene: ProbeScene):
+    """The source's full image and its lobes (None: cannot isolate; zeros: has no such lobe)."""
+    full = src(job.source_params, scene=scene)
+    lobes: dict[str, np.ndarray | None] = {}
+    for lobe in ("diffuse", "specular"):
+        spec = job.source_spec.lobes.get(lobe)
+        if spec is None:
+            lobes[lobe] = None
+        elif spec.empty:
+            lobes[lobe] = np.zeros_like(full)
+        else:
+            lobes[lobe] = src(job.source_params, lobe, scene=scene)
+    return full, lobes
 
 
 def _jsonable(v: Value) -> Any:

@@ -138,3 +138,26 @@ def test_plan_stages_folds_a_missing_target_lobe_into_the_full_image():
     used, stages, _ = plan_stages("two", conductor, ["specular", "alpha"], {"diffuse": 1, "specular": 1})
     assert used == "two"
     assert stages == [("specular", None, ["specular", "alpha"], None)]
+
+
+def test_coarse_to_fine_does_most_renders_at_low_resolution():
+    from brdfremap.core.remap import Level
+
+    adapter = ToyAdapter()
+    small = SCENE.with_(resolution=16)
+    render = lambda p, lobe=None: adapter.render("toy", p, SCENE, lobe)  # noqa: E731
+    render_small = lambda p, lobe=None: adapter.render("toy", p, small, lobe)  # noqa: E731
+    src, src_small = render(TRUTH), render_small(TRUTH)
+    lobes = {lobe: render(TRUTH, lobe) for lobe in ("diffuse", "specular")}
+    lobes_small = {lobe: render_small(TRUTH, lobe) for lobe in ("diffuse", "specular")}
+    base = TOY.complete({})
+    res = remap(TOY, render, src, lobes, base=base, free=TOY.fittable(base),
+                coarse=Level(render_small, src_small, lobes_small))
+    coarse = [s for s in res.stages if s.resolution == 16]
+    fine = [s for s in res.stages if s.resolution == 48]
+    assert coarse and sum(s.renders for s in coarse) > sum(s.renders for s in fine)
+    for s in fine:
+        assert s.renders <= len(s.free) * 3 + 1 + RemapOptions().fine_steps
+    assert abs(res.params["alpha"] / 0.15 - 1) < 0.01 and res.relative_rmse < 1e-3
+    assert res.reliable, res.reason
+
