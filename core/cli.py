@@ -120,6 +120,7 @@ def cmd_remap(args: argparse.Namespace) -> int:
             raise ConfigError(msg, field=f"--{field}") from exc
         raise
     registry = collect_adapters()
+    args.adapter = registry.resolve(args.adapter)
     entry = registry.get(args.adapter)
     if args.model not in entry.models:
         raise ConfigError(f"adapter {args.adapter!r} has no model {args.model!r} (models: "

@@ -18,3 +18,11 @@ def brdfremap_register_adapters(register):
     not import the renderer at module level: the host constructs the adapter only when a
     user chooses it, so ``remap --help`` and ``remap adapters`` stay fast.
     """
+
+
+@hookspec(firstresult=True)
+def brdfremap_adapter_from_file(path):
+    """Load an adapter described by a file (``--adapter path/to/renderer.yaml``).
+
+    Return ``(name, factory)`` if this plugin understands the file, else None. Raise
+    ``ConfigError`` naming the file and field when it is yours but invalid."""

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import importlib.metadata
+import os
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import pluggy
@@ -35,14 +37,42 @@ class AdapterEntry:
 class AdapterRegistry:
     entries: dict[str, AdapterEntry] = field(default_factory=dict)
     broken: dict[str, str] = field(default_factory=dict)
+    pm: Any = None
+
+    def resolve(self, name: str, *, file: str | None = None, field_name: str = "--adapter") -> str:
+        """An adapter name, or a definition file (``renderer.yaml``) loaded now through the
+        ``brdfremap_adapter_from_file`` hook. Returns the adapter's name."""
+        if name in self.entries:
+            return name
+        path = Path(name)
+        if file and not path.is_absolute():
+            path = Path(file).parent / path
+        if path.suffix not in (".yaml", ".yml") and os.sep not in name:
+            return self.get(name, file=file, field_name=field_name).name
+        if not path.is_file():
+            raise ConfigError("adapter file not found (check the path)", file=str(path), field=field_name if not file else "adapter")
+        got = self.pm.hook.brdfremap_adapter_from_file(path=str(path)) if self.pm else None
+        if got is None:
+            raise ConfigError("no installed plugin understands this adapter file", file=str(path))
+        adapter_name, factory = got
+        existing = self.entries.get(adapter_name)
+        if existing is not None:
+            same = getattr(existing.factory, "source_file", None)
+            if same is not None and Path(same).resolve() == path.resolve():
+                return adapter_name
+            raise ConfigError(f"adapter name {adapter_name!r} is already taken by {existing.plugin}",
+                              file=str(path), field="name")
+        self.entries[adapter_name] = AdapterEntry(adapter_name, factory, f"file {path}")
+        return adapter_name
 
     def names(self) -> list[str]:
         return sorted(self.entries)
 
-    def get(self, name: str) -> AdapterEntry:
+    def get(self, name: str, *, file: str | None = None, field_name: str = "--adapter") -> AdapterEntry:
         if name not in self.entries:
             known = ", ".join(self.names()) or "none"
-            raise ConfigError(f"unknown adapter {name!r} (installed: {known}; see `remap adapters`)", field="--adapter")
+            raise ConfigError(f"unknown adapter {name!r} (installed: {known}; see `remap adapters`)",
+                              file=file, field="adapter" if file else field_name)
         return self.entries[name]
 
     def create(self, name: str):
@@ -94,7 +124,7 @@ def get_plugin_manager(*, load_entrypoints: bool = True, plugins: tuple = ()) ->
 def collect_adapters(pm: PluginManager | None = None) -> AdapterRegistry:
     """Call every plugin's register hook; duplicate names are rejected naming both plugins."""
     pm = pm or get_plugin_manager()
-    registry = AdapterRegistry(broken=dict(getattr(pm, "broken", {})))
+    registry = AdapterRegistry(broken=dict(getattr(pm, "broken", {})), pm=pm)
     labels = getattr(pm, "labels", {})
     for impl in pm.hook.brdfremap_register_adapters.get_hookimpls():
         label = labels.get(id(impl.plugin), impl.plugin_name)

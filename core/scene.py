@@ -66,6 +66,21 @@ class ProbeScene(_Strict):
     def with_(self, **changes) -> "ProbeScene":
         return self.model_copy(update={k: v for k, v in changes.items() if v is not None})
 
+    def document(self) -> dict:
+        """The scene in physical units with positions resolved: what renderers outside this
+        package receive (`{scene_json}`, the Cycles worker)."""
+        cam = self.camera
+        return {
+            "units": {"length": "scene units", "light_intensity": "W/sr (radiant intensity)",
+                      "fov": "degrees, horizontal", "image": "linear RGB radiance, float32"},
+            "sphere": {"center": list(self.sphere.center), "radius": self.sphere.radius},
+            "camera": {"position": list(cam.position), "target": list(cam.target), "up": list(cam.up), "fov": cam.fov},
+            "light": {"type": "point", "position": list(self.light.position), "intensity": self.light.intensity},
+            "background": [0.0, 0.0, 0.0],
+            "integrator": "direct lighting only",
+            "width": self.resolution, "height": self.resolution, "spp": self.spp, "seed": self.seed,
+        }
+
     def cache_key(self) -> str:
         return self.model_dump_json(exclude={"name", "note"})
 

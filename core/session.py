@@ -65,9 +65,7 @@ def prepare(
     options: RemapOptions,
 ) -> Job:
     """Check everything before any render: adapters, models, parameters, bounds."""
-    if source.adapter not in registry.entries:
-        known = ", ".join(registry.names()) or "none"
-        raise ConfigError(f"unknown adapter {source.adapter!r} (installed: {known})", file=source_file, field="adapter")
+    source = source.model_copy(update={"adapter": registry.resolve(source.adapter, file=source_file)})
     src_spec = _model(registry, source.adapter, source.model, source_file, "model")
     src_params = src_spec.complete(source.params, file=source_file)
     tgt_spec = _model(registry, target_adapter, target_model, None, "--model")

@@ -7,9 +7,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from .metrics import relative_rmse
 from .scene import ProbeScene
 
 
@@ -78,3 +80,99 @@ def analytic_lambert(scene: ProbeScene, albedo: float | tuple[float, float, floa
     e, _ = point_light_irradiance(scene, hits)
     rho = np.broadcast_to(np.asarray(albedo, dtype=np.float64), (3,))
     return (e[..., None] * rho / math.pi).astype(np.float32)
+
+
+# -- the adapter contract test kit ------------------------------------------------------
+
+class AdapterContract:
+    """Contract tests any adapter author runs against their adapter (pytest).
+
+    Subclass it in a test module, named ``Test...``, and set the class attributes::
+
+        from brdfremap.core.testing import AdapterContract
+
+        class TestMyRenderer(AdapterContract):
+            factory = MyAdapter                       # the registered class
+            calibration = ("diffuse", {"reflectance": 0.8})   # a white Lambertian, albedo 0.8
+
+    The checks: image shape, dtype, finiteness and black background for every model;
+    bit-identical renders for a fixed seed; lobes that sum to the full image; and the white
+    diffuse sphere against the analytic radiance (same physical units as every adapter).
+    """
+
+    factory: Any = None
+    calibration: tuple[str, dict] | None = None
+    scene = ProbeScene(resolution=48, spp=16)
+    calibration_scene = ProbeScene(resolution=64, spp=64)
+    calibration_tolerance = 0.01
+    lobe_tolerance = 1e-4
+
+    @classmethod
+    def setup_class(cls):
+        import pytest
+
+        if cls.factory is None:
+            pytest.skip("set `factory` to the adapter class")
+        reason = cls.factory.unavailable_reason()
+        if reason:
+            pytest.skip(f"{cls.factory.name} unavailable: {reason}")
+        cls.adapter = cls.factory()
+
+    @classmethod
+    def teardown_class(cls):
+        adapter = getattr(cls, "adapter", None)
+        if adapter is not None:
+            adapter.close()
+
+    def _params(self, model: str, **given):
+        return self.adapter.models[model].complete(given)
+
+    def test_models_are_described(self):
+        assert self.adapter.models, "the adapter declares no models"
+        for name, spec in self.adapter.models.items():
+            assert spec.name == name
+            spec.complete({})  # defaults are valid
+
+    def test_render_shape_dtype_finite_black_background(self):
+        n = self.scene.resolution
+        for model in self.adapter.models:
+            img = self.adapter.render(model, self._params(model), self.scene)
+            assert isinstance(img, np.ndarray), f"{model}: not a numpy array"
+            assert img.shape == (n, n, 3), f"{model}: shape {img.shape}, expected {(n, n, 3)}"
+            assert img.dtype == np.float32, f"{model}: dtype {img.dtype}, expected float32"
+            assert np.isfinite(img).all(), f"{model}: NaN or Inf pixels"
+            assert img.max() > 0, f"{model}: black image"
+            assert img[0, 0].max() == 0 and img[-1, -1].max() == 0, f"{model}: background is not black"
+
+    def test_fixed_seed_is_deterministic(self):
+        for model in self.adapter.models:
+            p = self._params(model)
+            a = self.adapter.render(model, p, self.scene)
+            b = self.adapter.render(model, p, self.scene.with_(seed=self.scene.seed + 1))
+            c = self.adapter.render(model, p, self.scene)
+            assert np.array_equal(a, c), f"{model}: two renders with one seed differ"
+            assert b.shape == a.shape
+
+    def test_lobes_sum_to_the_full_image(self):
+        for model, spec in self.adapter.models.items():
+            if not spec.has_lobes or any(lobe.empty for lobe in spec.lobes.values()):
+                continue
+            p = self._params(model)
+            full = self.adapter.render(model, p, self.scene)
+            parts = sum(self.adapter.render(model, p, self.scene, lobe) for lobe in ("diffuse", "specular"))
+            err = relative_rmse(full, parts)
+            assert err < self.lobe_tolerance, f"{model}: diffuse + specular differs from full by {err:.2e}"
+
+    def test_white_diffuse_sphere_matches_the_analytic_radiance(self):
+        import pytest
+
+        if self.calibration is None:
+            pytest.skip("no calibration material given")
+        model, given = self.calibration
+        scene = self.calibration_scene
+        img = self.adapter.render(model, self._params(model, **given), scene)
+        inner = sphere_hits(scene).interior
+        err = relative_rmse(analytic_lambert(scene, 0.8)[inner], img[inner])
+        assert err < self.calibration_tolerance, (
+            f"white diffuse sphere differs from the analytic radiance by {err:.2%}: check the light's "
+            "units (radiant intensity in W/sr), the camera's field of view and the sphere's size")

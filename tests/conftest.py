@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(Path(__file__).parent))  # analytic_adapter
+sys.path.insert(0, str(ROOT / "examples" / "brdfremap-example"))  # the example adapter package
 
 
 def pytest_addoption(parser):

@@ -115,7 +115,7 @@ class CyclesAdapter(Adapter):
         import json
 
         req = {"model": model, "params": {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()},
-               "scene": json.loads(scene.model_dump_json(exclude={"name", "note"}))}
+               "scene": scene.document()}
         key = json.dumps(req, sort_keys=True)
         passes = self._passes.get(key)
         if passes is None:

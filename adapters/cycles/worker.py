@@ -36,7 +36,7 @@ class BlenderState:
         scene = bpy.context.scene
         r = scene.render
         r.engine = "CYCLES"
-        r.resolution_x = r.resolution_y = sc_json["resolution"]
+        r.resolution_x, r.resolution_y = sc_json["width"], sc_json["height"]
         r.resolution_percentage = 100
         r.use_compositing = False
         r.use_sequencer = False
@@ -81,18 +81,20 @@ class BlenderState:
         self.scene_key = key
 
     def _camera(self, scene, cam: dict) -> None:
-        from mathutils import Vector
+        from mathutils import Matrix, Vector
 
         bpy = self.bpy
         data = bpy.data.cameras.new("probe-camera")
         data.sensor_fit = "HORIZONTAL"
         data.angle = math.radians(cam["fov"])
         obj = bpy.data.objects.new("probe-camera", data)
-        tx, ty, tz = cam["target"]
-        obj.location = (tx, ty, tz + cam["distance"])
-        direction = Vector(cam["target"]) - obj.location
+        obj.location = tuple(cam["position"])
+        forward = (Vector(cam["target"]) - Vector(cam["position"])).normalized()
+        right = forward.cross(Vector(cam["up"])).normalized()
+        up = right.cross(forward)
+        # Blender cameras look down their local -Z with +Y up.
         obj.rotation_mode = "QUATERNION"
-        obj.rotation_quaternion = direction.to_track_quat("-Z", "Y")
+        obj.rotation_quaternion = Matrix((right, up, -forward)).transposed().to_quaternion()
         scene.collection.objects.link(obj)
         scene.camera = obj
 
@@ -106,8 +108,7 @@ class BlenderState:
         if hasattr(data, "use_soft_falloff"):
             data.use_soft_falloff = False
         obj = bpy.data.objects.new("probe-light", data)
-        t, p, rr = math.radians(light["theta"]), math.radians(light["phi"]), light["r"]
-        obj.location = (rr * math.sin(t) * math.cos(p), rr * math.sin(t) * math.sin(p), rr * math.cos(t))
+        obj.location = tuple(light["position"])
         scene.collection.objects.link(obj)
 
     def _sphere(self, scene, sphere: dict) -> None:

@@ -6,7 +6,7 @@ import pytest
 from brdfremap.core.errors import OptimisationError
 from brdfremap.core.remap import ParamSpace, RemapOptions, plan_stages, remap
 from brdfremap.core.scene import ProbeScene
-from analytic_adapter import TOY, ToyAdapter
+from brdfremap_example.adapter import TOY, ToyAdapter
 
 SCENE = ProbeScene(resolution=48)
 TRUTH = TOY.complete({"diffuse": (0.6, 0.3, 0.1), "specular": 0.8, "alpha": 0.15})

@@ -7,7 +7,7 @@ import pytest
 from brdfremap.core import hookimpl
 from brdfremap.core.errors import AdapterUnavailableError, ConfigError
 from brdfremap.core.plugins import collect_adapters, get_plugin_manager
-from analytic_adapter import ToyAdapter
+from brdfremap_example.adapter import ToyAdapter
 
 
 def _plugin(name, *adapters):
@@ -87,3 +87,17 @@ def test_builtin_adapters_come_through_the_entry_point_group():
     reg = collect_adapters(get_plugin_manager())
     assert "mitsuba" in reg.names()
     assert reg.get("mitsuba").plugin.startswith("brdf-remap")
+
+
+def test_example_package_installs_with_pip_and_appears_in_remap_adapters(tmp_path, root):
+    import subprocess
+    import sys
+
+    target = tmp_path / "site"
+    subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--no-build-isolation",
+                    "--target", str(target), str(root / "examples" / "brdfremap-example")], check=True)
+    env = {**__import__("os").environ, "PYTHONPATH": str(target)}
+    out = subprocess.run([sys.executable, "-m", "brdfremap.core.cli", "adapters"], env=env, capture_output=True,
+                         text=True, check=True).stdout
+    assert "toy  [brdfremap-example (toy)]" in out
+    assert "model toy: diffuse, specular, alpha, unused" in out

@@ -2,7 +2,7 @@ import pytest
 
 from brdfremap.core.errors import ConfigError
 from brdfremap.core.schemas import LobeSpec, ModelSpec, ParamSpec, parse_fix
-from analytic_adapter import TOY
+from brdfremap_example.adapter import TOY
 
 
 def test_complete_fills_defaults_and_canonicalises_rgb():

@@ -1,5 +1,8 @@
-"""A tiny analytic adapter in numpy: the example of authoring an adapter, and a fast,
-exact renderer for optimiser unit tests. Never the evidence that remapping works."""
+"""A tiny analytic adapter in numpy: the example of authoring an adapter.
+
+It renders the probe scene itself (Lambert + a Gaussian-in-angle specular lobe), so it
+needs nothing but numpy. brdf-remap's own tests use it as a fast, exact renderer for the
+optimiser; it is never the evidence that remapping works with real renderers."""
 
 from __future__ import annotations
 
@@ -28,7 +31,7 @@ TOY = ModelSpec(
 
 class ToyAdapter(Adapter):
     name = "toy"
-    summary = "analytic numpy sphere (tests only)"
+    summary = "analytic numpy sphere (example adapter package)"
     models = {"toy": TOY}
 
     def __init__(self):

@@ -1,0 +1,238 @@
+"""Any renderer that runs from a command line, described by a YAML file.
+
+Each render writes the probe scene and the parameters to files, runs the command (an argv
+list: placeholders are substituted inside single arguments, never through a shell), and
+reads the image it wrote. A persistent renderer is started once and answers JSON lines."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import math
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from brdfremap.core.errors import ConfigError, RenderError
+from brdfremap.core.protocol import Adapter
+from brdfremap.core.scene import ProbeScene
+from brdfremap.core.schemas import Value, format_value
+from brdfremap.core.workerproc import JsonLinesWorker
+
+from .definition import _TOKEN, RendererDef, load_definition
+
+
+def template_vars(scene: ProbeScene) -> dict[str, str]:
+    cam, light, sph = scene.camera, scene.light, scene.sphere
+    out = {"width": scene.resolution, "height": scene.resolution, "spp": scene.spp, "seed": scene.seed,
+           "fov": cam.fov, "sphere_radius": sph.radius, "light_intensity": light.intensity}
+    for prefix, vec in (("camera", cam.position), ("target", cam.target), ("up", cam.up),
+                        ("light", light.position), ("sphere", sph.center)):
+        for axis, v in zip("xyz", vec):
+            out[f"{prefix}_{axis}"] = v
+    return {k: (f"{v:.9g}" if isinstance(v, float) else str(v)) for k, v in out.items()}
+
+
+def substitute(text: str, values: dict[str, str], where: str) -> str:
+    def one(m):
+        name = m.group(1)
+        if name not in values:
+            raise ConfigError(f"unknown placeholder {{{name}}}", field=where)
+        return values[name]
+
+    return _TOKEN.sub(one, text)
+
+
+def which(exe: str) -> str | None:
+    """PATH lookup that also searches this Python's bin folder (a venv's console scripts,
+    such as `mitsuba`, are there even when the venv is not activated)."""
+    path = os.environ.get("PATH", "") + os.pathsep + str(Path(sys.executable).parent)
+    return shutil.which(exe, path=path)
+
+
+def _srgb_to_linear(x: np.ndarray) -> np.ndarray:
+    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4).astype(np.float32)
+
+
+class SubprocessAdapter(Adapter):
+    """Base of the classes made by ``adapter_class`` for each YAML definition."""
+
+    definition: RendererDef
+    source_file: Path
+
+    @classmethod
+    def unavailable_reason(cls) -> str | None:
+        d = cls.definition
+        for req in d.requires:
+            if req.startswith("py:"):
+                if importlib.util.find_spec(req[3:]) is None:
+                    return f"Python module {req[3:]!r} is not installed"
+            elif which(req) is None:
+                return f"executable {req!r} not found on PATH"
+        exe = d.command[0]
+        if "{" not in exe and which(exe) is None and not (cls.source_file.parent / exe).exists():
+            return f"executable {exe!r} not found on PATH"
+        return None
+
+    def __init__(self) -> None:
+        d = self.definition
+        base = "/dev/shm" if os.access("/dev/shm", os.W_OK) else None
+        self.work = Path(tempfile.mkdtemp(prefix=f"brdfremap-{d.name}-", dir=base))
+        self.here = str(self.source_file.parent.resolve())
+        self.template = None
+        if d.scene_template:
+            tpath = self.source_file.parent / d.scene_template
+            try:
+                self.template = tpath.read_text(encoding="utf-8")
+            except OSError as exc:
+                raise ConfigError(f"cannot read the scene template: {exc}", file=str(self.source_file),
+                                  field="scene_template") from exc
+        self.env = {**os.environ, **d.env}
+        self.worker = None
+        if d.mode == "persistent":
+            argv = [substitute(a, {"python": sys.executable, "here": self.here}, "command") for a in d.command]
+            argv[0] = which(argv[0]) or argv[0]
+            self.worker = JsonLinesWorker(argv, name=f"renderer {d.name!r}", env=self.env, cwd=self.here,
+                                          start_timeout=d.start_timeout, request_timeout=d.timeout)
+        self.count = 0
+
+    def describe(self) -> dict[str, Any]:
+        return {"renderer": f"external: {self.definition.name}", "definition": str(self.source_file),
+                "mode": self.definition.mode}
+
+    # -- one render ------------------------------------------------------------------
+    def _value(self, v: Value) -> str:
+        if isinstance(v, tuple):
+            return self.definition.rgb_format.format(r=f"{v[0]:.9g}", g=f"{v[1]:.9g}", b=f"{v[2]:.9g}")
+        return v if isinstance(v, str) else f"{v:.9g}"
+
+    def _fail(self, model, params, what: str, stderr: str = "") -> RenderError:
+        shown = ", ".join(f"{k}={format_value(v)}" for k, v in params.items())
+        tail = "".join(f"\n  stderr: {line}" for line in stderr.strip().splitlines()[-8:])
+        return RenderError(f"renderer {self.definition.name!r} ({model}: {shown}): {what}{tail}")
+
+    def render(self, model: str, params: dict[str, Value], scene: ProbeScene, lobe: str | None = None) -> np.ndarray:
+        d = self.definition
+        p = self.models[model].with_lobe(params, lobe)
+        self.count += 1
+        job = self.work / f"r{self.count}"
+        job.mkdir()
+        try:
+            output = job / f"image.{d.output_format}"
+            scene_json, params_json = job / "scene.json", job / "params.json"
+            scene_json.write_text(json.dumps(scene.document(), indent=1))
+            params_json.write_text(json.dumps({"model": model, "params": {
+                k: list(v) if isinstance(v, tuple) else v for k, v in p.items()}}, indent=1))
+            values = {"scene_json": str(scene_json), "params_json": str(params_json), "output": str(output),
+                      "model": model, "width": str(scene.resolution), "height": str(scene.resolution),
+                      "spp": str(scene.spp), "seed": str(scene.seed), "python": sys.executable, "here": self.here}
+            if self.template is not None:
+                tvars = {**template_vars(scene), "model": model, **{f"p_{k}": self._value(v) for k, v in p.items()}}
+                tvars.update(d.models[model].template_vars)
+                scene_file = job / f"scene{Path(d.scene_template).suffix}"
+                scene_file.write_text(substitute(self.template, tvars, f"scene_template {d.scene_template}"))
+                values["scene_file"] = str(scene_file)
+            stderr = ""
+            if self.worker is not None:
+                request = {"op": "render", "model": model,
+                           "params": {k: list(v) if isinstance(v, tuple) else v for k, v in p.items()},
+                           "scene": scene.document(), "output": str(output)}
+                try:
+                    self.worker.request(request)
+                except RenderError as exc:
+                    raise self._fail(model, p, str(exc).split(": ", 1)[-1]) from None
+            else:
+                stderr = self._run_once(model, p, values)
+            return self._read(model, p, output, scene, stderr)
+        finally:
+            shutil.rmtree(job, ignore_errors=True)
+
+    def _argv(self, p: dict[str, Value], values: dict[str, str]) -> list[str]:
+        argv: list[str] = []
+        for arg in self.definition.command:
+            if arg == "{defines}":
+                for k, v in p.items():
+                    argv += [t.replace("{key}", k).replace("{value}", self._value(v)) for t in self.definition.define]
+            else:
+                argv.append(substitute(arg, values, "command"))
+        found = which(argv[0])
+        if found:
+            argv[0] = found
+        return argv
+
+    def _run_once(self, model, p, values) -> str:
+        argv = self._argv(p, values)
+        try:
+            proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                    text=True, env=self.env, cwd=self.here, start_new_session=True)
+        except OSError as exc:
+            raise self._fail(model, p, f"cannot run {argv[0]!r}: {exc}") from None
+        try:
+            out, err = proc.communicate(timeout=self.definition.timeout)
+        except subprocess.TimeoutExpired:
+            try:
+                os.killpg(proc.pid, signal.SIGKILL)  # the whole group: the renderer's helpers too
+            except ProcessLookupError:
+                pass
+            out, err = proc.communicate()
+            raise self._fail(model, p, f"timed out after {self.definition.timeout:g} s (process group killed)",
+                             err or out) from None
+        if proc.returncode != 0:
+            raise self._fail(model, p, f"exit code {proc.returncode}", err or out)
+        return err or out
+
+    def _read(self, model, p, output: Path, scene: ProbeScene, stderr: str) -> np.ndarray:
+        import OpenImageIO as oiio
+
+        if not output.exists() or output.stat().st_size == 0:
+            raise self._fail(model, p, f"wrote no image at {output.name}", stderr)
+        inp = oiio.ImageInput.open(str(output))
+        if inp is None:
+            raise self._fail(model, p, f"unreadable image: {oiio.geterror().strip()}", stderr)
+        try:
+            spec = inp.spec()
+            if spec.nchannels < 3:
+                raise self._fail(model, p, f"image has {spec.nchannels} channels, need RGB", stderr)
+            pixels = inp.read_image(0, 0, 0, 3, "float")
+        finally:
+            inp.close()
+        if pixels is None:
+            raise self._fail(model, p, f"truncated or corrupt image: {oiio.geterror().strip()}", stderr)
+        img = np.asarray(pixels, dtype=np.float32)
+        want = (scene.resolution, scene.resolution)
+        if img.shape[:2] != want:
+            raise self._fail(model, p, f"image is {img.shape[1]}x{img.shape[0]}, expected {want[1]}x{want[0]}", stderr)
+        if not np.isfinite(img).all():
+            raise self._fail(model, p, f"image has {int((~np.isfinite(img)).sum())} NaN or Inf values", stderr)
+        if self.definition.output_format == "png":
+            img = _srgb_to_linear(img)  # an 8-bit PNG is display-encoded
+        return img
+
+    def close(self) -> None:
+        if self.worker is not None:
+            self.worker.close()
+        shutil.rmtree(self.work, ignore_errors=True)
+
+
+def adapter_class(path: str | Path) -> type[SubprocessAdapter]:
+    """A new adapter class for one YAML definition (validated now, run later)."""
+    path = Path(path)
+    d = load_definition(path)
+    return type(f"External_{d.name}", (SubprocessAdapter,), {
+        "name": d.name, "definition": d, "source_file": path, "models": d.model_specs(),
+        "summary": d.description or f"external renderer ({d.mode}) from {path}",
+        "install_hint": f"see {path}",
+    })
+
+
+def search_dirs() -> list[Path]:
+    dirs = [Path(p) for p in os.environ.get("BRDFREMAP_RENDERERS", "").split(os.pathsep) if p]
+    dirs += [Path.cwd() / "configs" / "renderers", Path.home() / ".config" / "brdfremap" / "renderers"]
+    return [d for d in dict.fromkeys(dirs) if d.is_dir()]

@@ -1,0 +1,104 @@
+"""The YAML description of an external renderer (no Python needed to plug one in)."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from brdfremap.core.configio import load_yaml_model
+from brdfremap.core.schemas import LobeSpec, ModelSpec, ParamSpec
+
+PLACEHOLDERS = ("scene_json", "params_json", "output", "model", "width", "height", "spp", "seed", "scene_file",
+                "python", "here", "defines")
+_TOKEN = re.compile(r"\{([a-z_]+)\}")
+
+
+class ModelDef(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    description: str = ""
+    parameters: list[ParamSpec] = Field(description="The model's parameters.")
+    lobes: dict[Literal["diffuse", "specular"], Any] = Field(
+        default_factory=dict,
+        description="Per lobe, the parameter values that isolate it ({specular: 0}); or the long form "
+                    "{overrides: {...}, params: [...]}; or 'empty'.")
+    template_vars: dict[str, str] = Field(default_factory=dict,
+                                          description="Extra text substituted into the scene template for this "
+                                                      "model, e.g. its <bsdf> element.")
+
+
+class RendererDef(BaseModel):
+    """An external renderer run as a command: one process per render, or one persistent process."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    name: str = Field(description="Adapter name shown by `remap adapters`.")
+    description: str = ""
+    command: list[str] = Field(min_length=1, description="argv; placeholders are substituted per argument.")
+    mode: Literal["oneshot", "persistent"] = Field("oneshot", description="persistent: JSON lines on stdin/stdout.")
+    timeout: float = Field(60.0, gt=0, description="Seconds per render (the process group is killed after).")
+    start_timeout: float = Field(120.0, gt=0, description="Seconds for a persistent renderer to greet.")
+    output_format: Literal["exr", "pfm", "png"] = Field("exr", description="What the renderer writes at {output}.")
+    define: list[str] = Field(["-D", "{key}={value}"],
+                              description="How `{defines}` expands for each parameter, e.g. ['-D', '{key}={value}'].")
+    rgb_format: str = Field("{r}, {g}, {b}", description="How an RGB value is written into a define or a template.")
+    scene_template: str | None = Field(None, description="A file (relative to this YAML) whose placeholders are "
+                                       "filled per render and passed as {scene_file}.")
+    env: dict[str, str] = Field(default_factory=dict, description="Extra environment variables.")
+    requires: list[str] = Field(default_factory=list,
+                                description="Executables or Python modules that must exist (`py:module`).")
+    models: dict[str, ModelDef]
+
+    @field_validator("command")
+    @classmethod
+    def _known_placeholders(cls, argv: list[str]) -> list[str]:
+        for arg in argv:
+            for name in _TOKEN.findall(arg):
+                if name not in PLACEHOLDERS:
+                    raise ValueError(f"unknown placeholder {{{name}}} in {arg!r} (known: {', '.join(PLACEHOLDERS)})")
+        if any("{defines}" in a and a != "{defines}" for a in argv):
+            raise ValueError("{defines} must be an argument of its own")
+        return argv
+
+    @model_validator(mode="after")
+    def _modes(self) -> "RendererDef":
+        if self.mode == "oneshot" and not any("{output}" in a for a in self.command):
+            raise ValueError("a oneshot command must say where to write the image: use {output}")
+        return self
+
+    def model_specs(self) -> dict[str, ModelSpec]:
+        specs = {}
+        for name, m in self.models.items():
+            numeric = [p.name for p in m.parameters if p.kind != "choice"]
+            lobes: dict[str, LobeSpec] = {}
+            raw = {k: v for k, v in m.lobes.items()}
+            short = {k: v for k, v in raw.items() if isinstance(v, dict) and "overrides" not in v and "params" not in v}
+            for lobe, v in raw.items():
+                if v == "empty":
+                    lobes[lobe] = LobeSpec(empty=True)
+                elif lobe in short:
+                    # Short form: the params of a lobe are those the *other* lobe switches off.
+                    other = "specular" if lobe == "diffuse" else "diffuse"
+                    mine = list(short.get(other, {}))
+                    if lobe == "specular":
+                        mine += [p for p in numeric if p not in mine and p not in short.get("specular", {})]
+                    lobes[lobe] = LobeSpec(overrides=v, params=tuple(dict.fromkeys(mine)))
+                else:
+                    lobes[lobe] = LobeSpec(**v)
+            specs[name] = ModelSpec(name=name, description=m.description, parameters=tuple(m.parameters),
+                                    lobes=lobes)
+        return specs
+
+
+def load_definition(path: str | Path) -> RendererDef:
+    definition = load_yaml_model(path, RendererDef)
+    try:
+        definition.model_specs()
+    except ValueError as exc:
+        from brdfremap.core.errors import ConfigError
+
+        raise ConfigError(str(exc).splitlines()[-1], file=str(path), field="models") from exc
+    return definition
