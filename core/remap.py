@@ -44,6 +44,9 @@ class RemapOptions:
     xtol: float = 1e-4
     method: Literal["trf", "dogbox"] = "trf"
     """scipy least-squares method; TRF (bounded, reflective) is the paper's."""
+    good_enough: float = 0.0
+    """Stop a fit whose relative RMSE falls to this (the session sets a fraction of the
+    noise floor: below it, steps only fit noise)."""
     threshold: float = 0.05
     """Relative RMSE above which a result is not reliable."""
     cond_limit: float = 1e4
@@ -147,6 +150,10 @@ class _BudgetExhausted(Exception):
     pass
 
 
+class _GoodEnough(Exception):
+    pass
+
+
 class _Stage:
     """One least-squares fit against one source image, counting renders and keeping the best point."""
 
@@ -179,6 +186,8 @@ class _Stage:
             self.best_err, self.best_u = err, u.copy()
         if self.progress:
             self.progress(self.name, self.counter[0], self.best_err)
+        if err <= self.options.good_enough and self.options.good_enough > 0:
+            raise _GoodEnough  # below the render noise: further steps only fit noise
         return r
 
     def jacobian(self, u: np.ndarray) -> np.ndarray:
@@ -191,6 +200,19 @@ class _Stage:
             v[j] += step
             J[:, j] = (self.residual(v) - r0) / step
         return J
+
+    def _snap_to_bounds(self) -> None:
+        """TRF approaches an optimum on a bound from the inside and stops short (metallic
+        0.005 for a dielectric); try the parameters that are nearly there exactly on it."""
+        u = self.best_u.copy()
+        near_lo, near_hi = (u > 0) & (u < 0.02), (u < 1) & (u > 0.98)
+        if not (near_lo.any() or near_hi.any()):
+            return
+        u[near_lo], u[near_hi] = 0.0, 1.0
+        try:
+            self.residual(u)  # kept as best_u if it is better
+        except (_BudgetExhausted, _GoodEnough):
+            pass
 
     def starts(self, u_base: np.ndarray) -> list[np.ndarray]:
         out = [u_base]
@@ -218,6 +240,10 @@ class _Stage:
                 ftol=self.options.ftol, xtol=self.options.xtol, gtol=1e-10, x_scale=1.0,
             )
             status = "converged" if res.status > 0 else f"stopped: {res.message}"
+            self._snap_to_bounds()
+        except _GoodEnough:
+            start_err = start_err if "start_err" in locals() else self.best_err
+            status = "converged (below the noise floor)"
         except _BudgetExhausted:
             start_err = start_err if "start_err" in locals() else self.best_err
             status = (f"converged (polished from the coarse optimum in {self.renders} renders)" if self.polish
@@ -337,7 +363,24 @@ def remap(
 
     # The verdict's Jacobian is taken at full resolution: at the coarse level a sharp highlight
     # is sub-pixel, so the coarse problem's minimum is not the result's (seen on α = 0.05).
-    reasons, cond = _verdict(target, params, free, source, norm, render, err, options, counter, notes)
+    reasons, cond, joint_gain = _verdict(target, params, free, source, norm, render, err, options, counter, notes)
+    if joint_gain and scheme_used != "one" and len(stages) > 1:
+        # The merged lobes are provably not a minimum of the full image (a coupling the split
+        # cannot see, e.g. a little Metallic standing in for Specular): refine jointly from here.
+        space = ParamSpace(target, params, free)
+        joint = _Stage("joint-refine", None, space, render, source, norm,
+                       replace(options, starts=1, max_renders_per_stage=2 * (space.dim + 1) + options.fine_steps),
+                       progress, counter, polish=True)
+        refined = space.decode(joint.run(space.encode(params)))
+        results.append(joint.result)
+        if joint.result.error < err:
+            notes.append(f"two-stage result was not a minimum of the full image; joint refinement took it "
+                         f"from {err:.2%} to {joint.result.error:.2%}")
+            params = refined
+            final = np.asarray(render(params, None), dtype=np.float32)
+            counter[0] += 1
+            err = relative_rmse(source, final)
+            reasons, cond, _ = _verdict(target, params, free, source, norm, render, err, options, counter, notes)
     if len(reasons) == 1 and err > options.threshold and all(r.status.startswith("converged") for r in results):
         reasons[0] += (" although the fit converged with no parameter pinned and a well-conditioned Jacobian:"
                        " a model mismatch (the closest this target model gets), not a failed fit")
@@ -355,7 +398,7 @@ def _verdict(target, params, free, source, norm, render, err, options, counter, 
     if err > options.threshold:
         reasons.append(f"error {err:.1%} above the {options.threshold:.0%} threshold")
     if not free:
-        return reasons, None
+        return reasons, None, False
     # One Jacobian of the full image at the solution: conditioning and active bounds.
     space = ParamSpace(target, params, free)
     stage = _Stage("check", None, space, render, source, norm,
@@ -383,8 +426,9 @@ def _verdict(target, params, free, source, norm, render, err, options, counter, 
     # Is the merged result a minimum of the full problem? A bounded Gauss-Newton step from
     # here predicts what a joint fit could still gain (the lobe split can miss a coupling).
     step = lsq_linear(J, -r, bounds=(-u, 1.0 - u))
-    predicted = float(np.linalg.norm(J @ step.x + r))
-    if math.sqrt(rr) - predicted > max(0.15 * math.sqrt(rr), 0.005):
+    predicted = max(float(np.linalg.norm(J @ step.x + r)), options.good_enough)
+    joint_gain = math.sqrt(rr) - predicted > max(0.15 * math.sqrt(rr), 0.005)
+    if joint_gain:
         reasons.append(f"not at a minimum of the full image: a joint step predicts {predicted:.1%} "
                        f"(try --scheme three)")
     for j, lab in enumerate(labels):
@@ -396,4 +440,4 @@ def _verdict(target, params, free, source, norm, render, err, options, counter, 
         if math.sqrt(rr) - better > max(0.1 * math.sqrt(rr), 0.002):
             side = "lower" if at_lo else "upper"
             reasons.append(f"{lab} pinned at its {side} bound (without it the error would drop to about {better:.1%})")
-    return reasons, cond
+    return reasons, cond, joint_gain

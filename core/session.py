@@ -138,9 +138,10 @@ def run(job: Job, registry: AdapterRegistry, adapters: dict[str, Adapter], progr
     source_image, lobes = _source_images(job, src, job.scene)
     source_noise = relative_rmse(source_image, src(job.source_params, scene=job.scene.with_(seed=job.scene.seed + 1)))
     opts = job.options
-    threshold = max(opts.threshold, 2.0 * source_noise)
-    if threshold != opts.threshold:
-        opts = replace(opts, threshold=threshold)
+    # Source noise only here (the target's is measured at the end): two renders of one
+    # material differ by `source_noise`, so matching closer than a third of it is noise.
+    opts = replace(opts, threshold=max(opts.threshold, 2.0 * source_noise),
+                   good_enough=max(opts.good_enough, source_noise / 3))
     coarse = None
     if opts.coarse_resolution and 2 * opts.coarse_resolution <= job.scene.resolution:
         small = job.scene.with_(resolution=opts.coarse_resolution)

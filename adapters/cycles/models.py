@@ -9,9 +9,11 @@ from brdfremap.core.schemas import LobeSpec, ModelSpec, ParamSpec
 # Lobes are isolated natively by render passes (Diffuse Direct x Diffuse Color, Glossy
 # Direct x Glossy Color), so no overrides: editing the material to hide a lobe changes the
 # other one (Specular IOR Level 0 shifts the diffuse term by about 10 %). Base Color shapes
-# both lobes: it is the diffuse albedo and, through Metallic, the metal's specular colour.
+# both lobes: it is the diffuse albedo and, through Metallic, the metal's specular colour;
+# Metallic too: it fades the diffuse lobe out. The engine refits shared parameters on the
+# full image in the second stage.
 PASS_LOBES_PRINCIPLED = {
-    "diffuse": LobeSpec(params=("base_color",)),
+    "diffuse": LobeSpec(params=("base_color", "metallic")),
     "specular": LobeSpec(params=("base_color", "metallic", "roughness", "ior", "specular_ior_level", "specular_tint",
                                  "coat_weight", "coat_roughness")),
 }
