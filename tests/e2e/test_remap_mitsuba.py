@@ -63,3 +63,13 @@ def test_cross_model_plastic_to_principled(tmp_path, root, mitsuba_adapter):
     assert r["metrics"]["relative_rmse"] < 0.25
     b = r["params"]["base_color"]
     assert b[2] > b[1] > b[0]  # still blue
+
+
+def test_mitsuba_cli_wrapper_agrees_with_the_in_process_adapter(tmp_path, root, mitsuba_adapter):
+    _, inproc = _run(tmp_path / "a", root, "copper.yaml", "--adapter", "mitsuba", "--model", "roughconductor",
+                     "--fix", "distribution=ggx")
+    _, cli = _run(tmp_path / "b", root, "copper.yaml", "--adapter", str(root / "configs/renderers/mitsuba-cli.yaml"),
+                  "--model", "roughconductor", "--fix", "distribution=ggx")
+    assert cli["target"]["adapter"] == "mitsuba-cli"
+    assert abs(cli["params"]["alpha"] / inproc["params"]["alpha"] - 1) < 0.02
+    assert abs(cli["metrics"]["relative_rmse"] - inproc["metrics"]["relative_rmse"]) < 0.01

@@ -1,0 +1,60 @@
+"""Today's exporters: fixed-formula conversions between material models (no renders).
+
+Each returns the target parameters an exporter would write. Two roughness conventions are
+common: copying the number ("identity α": Blender roughness = α) and α = roughness²
+(Blender roughness = √α). Conductor colours use the normal-incidence Fresnel reflectance
+F0 of the source's complex IOR, as exporters do for a metal's base colour."""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+
+@lru_cache(maxsize=None)
+def preset_eta_k(material: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """RGB eta and k of one of Mitsuba's conductor presets (asks Mitsuba itself)."""
+    import mitsuba as mi
+
+    from brdfremap.adapters.mitsuba.adapter import MitsubaAdapter
+
+    MitsubaAdapter()  # selects the variant
+    params = mi.traverse(mi.load_dict({"type": "roughconductor", "material": material}))
+    return tuple(float(x) for x in params["eta.value"][0]), tuple(float(x) for x in params["k.value"][0])
+
+
+def f0(eta, k):
+    return tuple(((n - 1) ** 2 + kk**2) / ((n + 1) ** 2 + kk**2) for n, kk in zip(eta, k))
+
+
+def _conductor(src):
+    if src["material"] != "none":
+        return preset_eta_k(src["material"])
+    return tuple(src["eta"]), tuple(src["k"])
+
+
+def convert(source_model: str, src: dict, target: str, convention: str) -> dict | None:
+    """Target parameters from a fixed formula; None where the pair has no such formula.
+
+    ``target`` is 'adapter:model[:distribution]'; ``convention`` is 'identity' or 'squared'."""
+    alpha = src.get("alpha")
+    rough = alpha if convention == "identity" else math.sqrt(alpha) if alpha is not None else None
+    adapter, model, *dist = target.split(":")
+    if source_model == "roughconductor":
+        eta, k = _conductor(src)
+        colour = tuple(min(c, 1.0) for c in f0(eta, k))
+        if target.startswith("cycles:principled"):
+            return {"base_color": colour, "metallic": 1.0, "roughness": min(rough, 1.0)}
+        if target.startswith("cycles:glossy"):
+            return {"distribution": dist[0], "color": colour, "roughness": min(rough, 1.0)}
+        if target.startswith("mitsuba:roughconductor"):
+            return {"distribution": dist[0], "material": src["material"], "alpha": alpha} \
+                if convention == "identity" else None
+    if source_model == "roughplastic":
+        if target.startswith("cycles:principled"):
+            return {"base_color": tuple(src["diffuse_reflectance"]), "metallic": 0.0, "roughness": min(rough, 1.0),
+                    "ior": src["int_ior"]}
+        if target.startswith("mitsuba:roughplastic"):
+            return {"distribution": dist[0], "diffuse_reflectance": tuple(src["diffuse_reflectance"]),
+                    "alpha": alpha, "int_ior": src["int_ior"]} if convention == "identity" else None
+    return None
