@@ -37,6 +37,8 @@ class RemapOptions:
     coarse_resolution: int | None = 32
     """Resolution of the coarse level where most iterations happen (used when the scene's
     resolution is at least twice it; None: one level). Renders cost about their pixel count."""
+    coarse_tol: float = 1e-3
+    """ftol and xtol of the coarse level (its optimum is polished at full resolution anyway)."""
     fine_steps: int = 3
     """With a coarse level: renders allowed at full resolution beyond one Jacobian, per stage."""
     max_renders_per_stage: int = 80
@@ -339,7 +341,8 @@ def remap(
         if coarse is not None:
             c_stage = _Stage(f"{name}@{coarse.source.shape[0]}px", lobe, space, coarse.render,
                              coarse.source if src_key is None else coarse.source_lobes[src_key],
-                             float(np.linalg.norm(coarse.source.astype(np.float64))), options, progress, counter)
+                             float(np.linalg.norm(coarse.source.astype(np.float64))),
+                             replace(options, ftol=options.coarse_tol, xtol=options.coarse_tol), progress, counter)
             params = space.decode(c_stage.run(space.encode(params)))
             results.append(c_stage.result)
             gained = c_stage.result.start_error - c_stage.result.error
