@@ -19,8 +19,11 @@ def preset_eta_k(material: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
     from brdfremap.adapters.mitsuba.adapter import MitsubaAdapter
 
     MitsubaAdapter()  # selects the variant
+    import numpy as np
+
     params = mi.traverse(mi.load_dict({"type": "roughconductor", "material": material}))
-    return tuple(float(x) for x in params["eta.value"][0]), tuple(float(x) for x in params["k.value"][0])
+    eta, k = (np.array(params[key], dtype=np.float64).ravel() for key in ("eta.value", "k.value"))
+    return tuple(float(x) for x in eta), tuple(float(x) for x in k)
 
 
 def f0(eta, k):
