@@ -31,7 +31,7 @@ def main():
     presets, alphas = (("Au", "Cu"), (0.1,)) if args.quick else (PRESETS, ALPHAS)
     reg = registry()
     rows = []
-    header = f"| source | target | rel. RMSE | ΔE_ITP | noise floor | renders | seconds | fitted α | verdict |"
+    header = "| source | target | rel. RMSE | ΔE_ITP | noise floor | renders | seconds | fitted α | verdict |"
     print(header)
     print("|---|---|---:|---:|---:|---:|---:|---:|---|")
     t_all = time.perf_counter()

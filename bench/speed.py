@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 import baselines
-from common import ROOT, median, registry, remap_once
+from common import median, registry, remap_once
 
 from brdfremap.core.atomic import write_text_atomic
 from brdfremap.core.metrics import delta_e_itp, relative_rmse
@@ -109,8 +109,7 @@ def main():
     args = ap.parse_args()
     which = "quick" if args.quick else "subset" if args.subset else "full"
     reg = registry()
-    head = (f"| case | target | method | renders | seconds | rel. RMSE | ΔE_ITP | × paper time | "
-            f"× floor error |")
+    head = "| case | target | method | renders | seconds | rel. RMSE | ΔE_ITP | × paper time | × floor error |"
     lines = [head, "|---|---|---|---:|---:|---:|---:|---:|---:|"]
     print("\n".join(lines), flush=True)
     summary = []

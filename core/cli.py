@@ -148,7 +148,8 @@ def cmd_remap(args: argparse.Namespace) -> int:
         ("params", _fmt_params(r.params, [p.name for p in spec.parameters if spec.is_active(p.name, r.params)])),
         ("relative RMSE", f"{r.relative_rmse:.2%}   (noise floor {outcome.noise_floor:.2%})"),
         ("perceptual", f"{r.perceptual:.2f} mean ΔE_ITP"),
-        ("renders", f"{r.renders} target + {outcome.source_renders} source"),
+        ("renders", f"{r.renders} target ({', '.join(f'{v} at {k}px' for k, v in outcome.renders_by_resolution.items())})"
+                    f" + {outcome.source_renders} source"),
         ("seconds", f"{r.seconds:.2f}"),
         ("scheme", r.scheme if r.scheme == r.scheme_used else f"{r.scheme} (used {r.scheme_used})"),
         ("reliable", ("yes" if r.reliable else "NO") + ("" if r.reliable else f": {r.reason}")),

@@ -37,8 +37,14 @@ class RemapOptions:
     coarse_resolution: int | None = 32
     """Resolution of the coarse level where most iterations happen (used when the scene's
     resolution is at least twice it; None: one level). Renders cost about their pixel count."""
+    polish_resolution: int | None = 64
+    """Resolution where each stage is polished and the verdict taken (used when the scene's
+    resolution is at least twice it; else the scene's own). The final error is always
+    measured at the scene's resolution."""
     coarse_tol: float = 1e-3
     """ftol and xtol of the coarse level (its optimum is polished at full resolution anyway)."""
+    separable_rgb: bool = True
+    """Use one render for the three Jacobian columns of an RGB parameter declared separable."""
     fine_steps: int = 3
     """With a coarse level: renders allowed at full resolution beyond one Jacobian, per stage."""
     max_renders_per_stage: int = 80
@@ -101,6 +107,10 @@ class ParamSpace:
             n = sl.stop - sl.start
             out += [name] if n == 1 else [f"{name}[{c}]" for c in "rgb"[:n]]
         return out
+
+    def separable_groups(self) -> list[slice]:
+        return [sl for name, sl in self.slices.items()
+                if self.spec.param(name).kind == "rgb" and self.spec.param(name).separable]
 
     def scalar_indices(self) -> list[int]:
         return [sl.start for name, sl in self.slices.items() if self.spec.param(name).kind == "scalar"]
@@ -193,14 +203,27 @@ class _Stage:
         return r
 
     def jacobian(self, u: np.ndarray) -> np.ndarray:
+        """Forward differences. A separable RGB parameter moves its three components in one
+        render: residual rows of channel c belong to component c alone."""
         r0 = self.residual(u)
         h = self.options.fd_step
-        J = np.empty((r0.size, u.size))
-        for j in range(u.size):
-            step = h if u[j] + h <= 1.0 else -h
+        J = np.zeros((r0.size, u.size))
+        steps = np.where(u + h <= 1.0, h, -h)
+        grouped = self.space.separable_groups() if self.options.separable_rgb else []
+        done = set()
+        for sl in grouped:
             v = u.copy()
-            v[j] += step
-            J[:, j] = (self.residual(v) - r0) / step
+            v[sl] += steps[sl]
+            d = self.residual(v) - r0
+            for c, j in enumerate(range(sl.start, sl.stop)):
+                J[c::3, j] = d[c::3] / steps[j]
+                done.add(j)
+        for j in range(u.size):
+            if j in done:
+                continue
+            v = u.copy()
+            v[j] += steps[j]
+            J[:, j] = (self.residual(v) - r0) / steps[j]
         return J
 
     def _snap_to_bounds(self) -> None:
@@ -309,13 +332,16 @@ def remap(
     options: RemapOptions = RemapOptions(),
     progress: ProgressFn | None = None,
     coarse: "Level | None" = None,
+    polish: "Level | None" = None,
 ) -> RemapResult:
     """Fit ``free`` parameters of ``target`` (others as in ``base``) so ``render`` matches ``source``.
 
     ``source_lobes`` holds the source's diffuse-only and specular-only images (None where
     the source cannot isolate a lobe; an all-zero image where it has no such lobe).
     ``coarse`` (render, source, source lobes at a lower resolution) moves most iterations
-    to cheap renders; each stage then finishes at full resolution from the coarse optimum."""
+    to cheap renders; each stage then finishes at the ``polish`` level (default: full
+    resolution) from the coarse optimum, where the verdict is also taken. The final error
+    is always measured at full resolution."""
     t0 = time.perf_counter()
     source = np.asarray(source, dtype=np.float32)
     if source.ndim != 3 or source.shape[2] != 3:
@@ -334,6 +360,9 @@ def remap(
     counter = [0]
     params = dict(base)
     results: list[StageResult] = []
+    fine = polish or Level(render, source, source_lobes)
+    fine_norm = float(np.linalg.norm(fine.source.astype(np.float64)))
+    fine_name = "" if polish is None else f"@{fine.source.shape[0]}px"
     for name, lobe, stage_free, src_key in stages:
         if not stage_free:
             continue
@@ -353,8 +382,9 @@ def remap(
             space = ParamSpace(target, params, stage_free)
         else:
             stage_opts = options
-        src = source if src_key is None else source_lobes[src_key]
-        stage = _Stage(name, lobe, space, render, src, norm, stage_opts, progress, counter, polish=coarse is not None)
+        src = fine.source if src_key is None else fine.source_lobes[src_key]
+        stage = _Stage(name + fine_name, lobe, space, fine.render, src, fine_norm, stage_opts, progress, counter,
+                       polish=coarse is not None)
         params = space.decode(stage.run(space.encode(params)))
         results.append(stage.result)
 
@@ -364,26 +394,29 @@ def remap(
     if progress:
         progress("final", counter[0], err)
 
-    # The verdict's Jacobian is taken at full resolution: at the coarse level a sharp highlight
-    # is sub-pixel, so the coarse problem's minimum is not the result's (seen on α = 0.05).
-    reasons, cond, joint_gain = _verdict(target, params, free, source, norm, render, err, options, counter, notes)
+    # The verdict's Jacobian is taken where the fit was polished: at the coarse level a sharp
+    # highlight is sub-pixel, so the coarse problem's minimum is not the result's (α = 0.05).
+    reasons, cond, joint_gain = _verdict(target, params, free, fine.source, fine_norm, fine.render, err, options,
+                                         counter, notes)
     if joint_gain and scheme_used != "one" and len(stages) > 1:
         # The merged lobes are provably not a minimum of the full image (a coupling the split
         # cannot see, e.g. a little Metallic standing in for Specular): refine jointly from here.
         space = ParamSpace(target, params, free)
-        joint = _Stage("joint-refine", None, space, render, source, norm,
+        joint = _Stage("joint-refine" + fine_name, None, space, fine.render, fine.source, fine_norm,
                        replace(options, starts=1, max_renders_per_stage=2 * (space.dim + 1) + options.fine_steps),
                        progress, counter, polish=True)
         refined = space.decode(joint.run(space.encode(params)))
         results.append(joint.result)
-        if joint.result.error < err:
-            notes.append(f"two-stage result was not a minimum of the full image; joint refinement took it "
-                         f"from {err:.2%} to {joint.result.error:.2%}")
-            params = refined
-            final = np.asarray(render(params, None), dtype=np.float32)
+        if joint.result.error < joint.result.start_error:
+            final_r = np.asarray(render(refined, None), dtype=np.float32)
             counter[0] += 1
-            err = relative_rmse(source, final)
-            reasons, cond, _ = _verdict(target, params, free, source, norm, render, err, options, counter, notes)
+            err_r = relative_rmse(source, final_r)
+            if err_r < err:
+                notes.append(f"two-stage result was not a minimum of the full image; joint refinement took it "
+                             f"from {err:.2%} to {err_r:.2%}")
+                params, final, err = refined, final_r, err_r
+                reasons, cond, _ = _verdict(target, params, free, fine.source, fine_norm, fine.render, err,
+                                            options, counter, notes)
     if len(reasons) == 1 and err > options.threshold and all(r.status.startswith("converged") for r in results):
         reasons[0] += (" although the fit converged with no parameter pinned and a well-conditioned Jacobian:"
                        " a model mismatch (the closest this target model gets), not a failed fit")

@@ -29,6 +29,9 @@ class ParamSpec(_Strict):
     choices: tuple[str, ...] = Field((), description="Allowed values of a choice parameter.")
     scale: Literal["linear", "log"] = Field("linear", description="How the optimiser normalises it to [0, 1].")
     fit: bool = Field(True, description="Fitted by default when it is the target (choices never are).")
+    separable: bool = Field(True, description="RGB only: each image channel depends on its own component alone "
+                                              "(an albedo or tint in an RGB renderer), so one render gives "
+                                              "all three Jacobian columns.")
     active_when: dict[str, tuple[str, ...]] = Field(
         default_factory=dict, description="Only meaningful when these choice parameters take one of these values."
     )

@@ -4,6 +4,7 @@ This is where adapters meet the engine; it still knows no renderer by name."""
 
 from __future__ import annotations
 
+import collections
 import json
 import math
 import platform
@@ -90,20 +91,25 @@ class Outcome:
     source_renders: int
     adapters: dict[str, Any] = field(default_factory=dict)
     noise: dict[str, float] = field(default_factory=dict)
+    renders_by_resolution: dict[int, int] = field(default_factory=dict)
 
 
 class _CachedRenderer:
     def __init__(self, adapter: Adapter, name: str, model: str, scene: ProbeScene, cache: RenderCache):
         self.adapter, self.name, self.model, self.scene, self.cache = adapter, name, model, scene, cache
-        self._scene_key = scene.cache_key()
+        self.by_resolution: collections.Counter[int] = collections.Counter()
 
     def __call__(self, params: dict[str, Value], lobe: str | None = None, scene: ProbeScene | None = None):
         sc = scene or self.scene
         rounded = {k: _round(v) for k, v in params.items()}
         key = render_key(self.name, self.model, rounded, sc.cache_key(), lobe)
         who = f"adapter {self.name!r} model {self.model!r}"
-        return self.cache.get_or_render(
-            key, lambda: check_image(self.adapter.render(self.model, dict(params), sc, lobe), sc, who))
+
+        def render():
+            self.by_resolution[sc.resolution] += 1
+            return check_image(self.adapter.render(self.model, dict(params), sc, lobe), sc, who)
+
+        return self.cache.get_or_render(key, render)
 
 
 def _round(v: Value) -> Value:
@@ -142,26 +148,33 @@ def run(job: Job, registry: AdapterRegistry, adapters: dict[str, Adapter], progr
     # material differ by `source_noise`, so matching closer than a third of it is noise.
     opts = replace(opts, threshold=max(opts.threshold, 2.0 * source_noise),
                    good_enough=max(opts.good_enough, source_noise / 3))
-    coarse = None
+    coarse = polish = None
     if opts.coarse_resolution and 2 * opts.coarse_resolution <= job.scene.resolution:
-        small = job.scene.with_(resolution=opts.coarse_resolution)
-        c_src, c_lobes = _source_images(job, src, small)
-        coarse = Level(lambda p, lobe=None: tgt(p, lobe, scene=small), c_src, c_lobes)
+        coarse = _level(job, src, tgt, job.scene.with_(resolution=opts.coarse_resolution))
+        if opts.polish_resolution and 2 * opts.polish_resolution <= job.scene.resolution:
+            polish = _level(job, src, tgt, job.scene.with_(resolution=opts.polish_resolution))
     result = remap(job.target_spec, tgt, source_image, lobes, base=job.base, free=job.free, options=opts,
-                   progress=progress, coarse=coarse)
+                   progress=progress, coarse=coarse, polish=polish)
     # The error two renders of the same material show, source and target noise combined:
     # n_x is the difference of two seeds (√2 σ_x), so the floor is sqrt((n_s² + n_t²) / 2).
     target_noise = relative_rmse(result.target_image, tgt(result.params, scene=job.scene.with_(seed=job.scene.seed + 1)))
-    result.renders += 1
+    # Renders the target adapter actually made: the engine's count includes repeats the cache served.
+    result.renders = tgt_cache.misses
     noise_floor = math.sqrt((source_noise**2 + target_noise**2) / 2)
     result.seconds = time.perf_counter() - t0
     info = {n: {"plugin": registry.get(n).plugin, **a.describe()} for n, a in adapters.items()}
     return Outcome(job, result, source_image, noise_floor, src_cache.misses, info,
-                   noise={"source": source_noise, "target": target_noise})
+                   noise={"source": source_noise, "target": target_noise},
+                   renders_by_resolution=dict(sorted(tgt.by_resolution.items())))
 
 
 def _finite_or_none(x: float | None) -> float | None:
     return x if x is not None and math.isfinite(x) else None
+
+
+def _level(job: Job, src: _CachedRenderer, tgt: _CachedRenderer, scene: ProbeScene) -> Level:
+    full, lobes = _source_images(job, src, scene)
+    return Level(lambda p, lobe=None: tgt(p, lobe, scene=scene), full, lobes)
 
 
 def _source_images(job: Job, src: _CachedRenderer, scene: ProbeScene):
@@ -209,6 +222,7 @@ def result_document(outcome: Outcome) -> dict[str, Any]:
             "jacobian_condition": _finite_or_none(r.jacobian_condition),
         },
         "renders": r.renders,
+        "renders_by_resolution": {f"{k}px": v for k, v in outcome.renders_by_resolution.items()},
         "source_renders": outcome.source_renders,
         "seconds": r.seconds,
         "scheme": r.scheme,

@@ -27,24 +27,31 @@ class BlenderState:
 
     # -- scene -------------------------------------------------------------------------
     def setup_scene(self, sc_json: dict) -> None:
-        key = json.dumps(sc_json, sort_keys=True)
-        if key == self.scene_key:
-            return
+        # Resolution, samples and seed change between the coarse, polish and final levels of
+        # one fit: set them on every request; rebuild only when the geometry changes.
+        per_render = ("width", "height", "spp", "seed")
+        key = json.dumps({k: v for k, v in sc_json.items() if k not in per_render}, sort_keys=True)
+        if key != self.scene_key:
+            self._build(sc_json)
+            self.scene_key = key
+        scene = self.bpy.context.scene
+        scene.render.resolution_x, scene.render.resolution_y = sc_json["width"], sc_json["height"]
+        scene.cycles.samples = sc_json["spp"]
+        scene.cycles.seed = sc_json["seed"]
+
+    def _build(self, sc_json: dict) -> None:
         bpy = self.bpy
         bpy.ops.wm.read_factory_settings(use_empty=True)
         self.materials = {}
         scene = bpy.context.scene
         r = scene.render
         r.engine = "CYCLES"
-        r.resolution_x, r.resolution_y = sc_json["width"], sc_json["height"]
         r.resolution_percentage = 100
         r.use_compositing = False
         r.use_sequencer = False
         r.film_transparent = False
         cy = scene.cycles
         cy.device = "CPU"
-        cy.samples = sc_json["spp"]
-        cy.seed = sc_json["seed"]
         cy.use_animated_seed = False
         cy.use_denoising = False
         cy.use_adaptive_sampling = False
@@ -78,7 +85,6 @@ class BlenderState:
         ims.color_depth = "32"
         ims.exr_codec = "NONE"
         r.use_file_extension = False
-        self.scene_key = key
 
     def _camera(self, scene, cam: dict) -> None:
         from mathutils import Matrix, Vector

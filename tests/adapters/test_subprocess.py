@@ -1,7 +1,6 @@
 """External renderers from YAML: the good path and every fault, with a real misbehaving process."""
 
 import json
-import os
 import subprocess
 import sys
 import time
