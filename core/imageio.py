@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
+import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -37,19 +40,48 @@ def write_exr(path: Path, image: np.ndarray) -> None:
     _write(path, np.ascontiguousarray(image, dtype=np.float32), "float")
 
 
-def read_image(path: Path) -> np.ndarray:
+@contextlib.contextmanager
+def captured_stderr():
+    """Capture what native libraries print on file descriptor 2 (OpenEXR reports a corrupt
+    file there) so it becomes part of an error message instead of noise on the terminal."""
+    box = {"text": ""}
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile(mode="w+b") as tmp:
+        os.dup2(tmp.fileno(), 2)
+        try:
+            yield box
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            tmp.seek(0)
+            box["text"] = tmp.read().decode("utf-8", "replace").strip()
+
+
+def read_rgb(path: Path) -> tuple[np.ndarray | None, str, int]:
+    """(pixels H x W x 3 float32, or None; why not; channel count). Never prints."""
     import OpenImageIO as oiio
 
-    inp = oiio.ImageInput.open(str(path))
-    if inp is None:
-        raise RemapError(f"cannot read image {path}: {oiio.geterror()}")
-    try:
-        pixels = inp.read_image(0, 0, 0, 3, "float")
-    finally:
-        inp.close()
+    with captured_stderr() as err:
+        inp = oiio.ImageInput.open(str(path))
+        if inp is None:
+            pixels, nch, why = None, 0, oiio.geterror()
+        else:
+            nch = inp.spec().nchannels
+            pixels = inp.read_image(0, 0, 0, 3, "float") if nch >= 3 else None
+            why = oiio.geterror() if pixels is None and nch >= 3 else ""
+            inp.close()
+    if not why:
+        lines = err["text"].splitlines()
+        why = lines[-1] if lines else ("no RGB channels" if pixels is None else "")
+    return (None if pixels is None else np.asarray(pixels, dtype=np.float32)), why, nch
+
+
+def read_image(path: Path) -> np.ndarray:
+    pixels, why, _ = read_rgb(path)
     if pixels is None:
-        raise RemapError(f"cannot read image {path}: {oiio.geterror()}")
-    return np.asarray(pixels, dtype=np.float32)
+        raise RemapError(f"cannot read image {path}: {why}")
+    return pixels
 
 
 def _srgb(x: np.ndarray) -> np.ndarray:

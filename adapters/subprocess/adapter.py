@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from brdfremap.core.errors import ConfigError, RenderError
+from brdfremap.core.imageio import read_rgb
 from brdfremap.core.protocol import Adapter
 from brdfremap.core.scene import ProbeScene
 from brdfremap.core.schemas import Value, format_value
@@ -188,22 +189,14 @@ class SubprocessAdapter(Adapter):
         return err or out
 
     def _read(self, model, p, output: Path, scene: ProbeScene, stderr: str) -> np.ndarray:
-        import OpenImageIO as oiio
-
         if not output.exists() or output.stat().st_size == 0:
             raise self._fail(model, p, f"wrote no image at {output.name}", stderr)
-        inp = oiio.ImageInput.open(str(output))
-        if inp is None:
-            raise self._fail(model, p, f"unreadable image: {oiio.geterror().strip()}", stderr)
-        try:
-            spec = inp.spec()
-            if spec.nchannels < 3:
-                raise self._fail(model, p, f"image has {spec.nchannels} channels, need RGB", stderr)
-            pixels = inp.read_image(0, 0, 0, 3, "float")
-        finally:
-            inp.close()
+        pixels, why, nch = read_rgb(output)
+        if pixels is None and 0 < nch < 3:
+            raise self._fail(model, p, f"image has {nch} channels, need RGB", stderr)
         if pixels is None:
-            raise self._fail(model, p, f"truncated or corrupt image: {oiio.geterror().strip()}", stderr)
+            what = "unreadable image" if nch == 0 else "truncated or corrupt image"
+            raise self._fail(model, p, f"{what}: {why}", stderr)
         img = np.asarray(pixels, dtype=np.float32)
         want = (scene.resolution, scene.resolution)
         if img.shape[:2] != want:

@@ -48,7 +48,7 @@ def test_good_render_is_the_analytic_image(oneshot):
     ("no_output", "wrote no image"),
     ("nan", "NaN or Inf"),
     ("wrong_size", "image is 28x28, expected 32x32"),
-    ("truncated", "image"),
+    ("truncated", "truncated or corrupt image: "),
     ("garbage", "unreadable image"),
 ])
 def test_faults_are_render_errors_naming_renderer_params_and_stderr(oneshot, fault, words):
@@ -65,7 +65,7 @@ def test_timeout_kills_the_whole_process_group(oneshot):
     t0 = time.monotonic()
     with pytest.raises(RenderError, match="timed out after 5 s \\(process group killed\\)"):
         oneshot.render("lambert", _p(oneshot, fault="hang"), SCENE)
-    assert time.monotonic() - t0 < 15
+    assert time.monotonic() - t0 < 60  # killed at the 5 s timeout, not after the 120 s hang
     time.sleep(0.5)
     left = subprocess.run(["pgrep", "-f", "import time; time.sleep\\(120\\)"], capture_output=True, text=True)
     assert left.stdout.strip() == "", "the renderer's helper process survived"
