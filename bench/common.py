@@ -28,4 +28,8 @@ def median(xs):
 
 
 def registry():
-    return collect_adapters()
+    """Installed adapters plus the shipped external-renderer definitions (whatever the cwd)."""
+    reg = collect_adapters()
+    for path in sorted((ROOT / "configs" / "renderers").glob("*.yaml")):
+        reg.resolve(str(path))
+    return reg
