@@ -75,7 +75,7 @@ class Progress:
             return
         now = time.perf_counter()
         err = "" if math.isnan(error) else f"  error {error:7.3%}"
-        line = f"  [{now - self.t0:6.1f}s] {stage:<9} renders {renders:4d}{err}"
+        line = f"  [{now - self.t0:6.1f}s] {stage:<14} renders {renders:4d}{err}"
         if self.tty:
             end = "\n" if stage != self.stage and self.stage is not None else ""
             sys.stderr.write(("\n" if end else "\r") + line)

@@ -12,14 +12,15 @@ from brdfremap.core import hookimpl
 def brdfremap_register_adapters(register):
     from brdfremap.core.errors import ConfigError
 
-    from .adapter import adapter_class, search_dirs
+    from .adapter import adapter_class, broken_definition, search_dirs
 
     for folder in search_dirs():
         for path in sorted(folder.glob("*.y*ml")):
             try:
                 cls = adapter_class(path)
-            except ConfigError:
-                continue  # listed by `remap adapters` through brdfremap_adapter_from_file errors
+            except ConfigError as exc:
+                # Listed as unavailable with the reason, so a typo in a definition is seen.
+                cls = broken_definition(path, str(exc))
             register(cls.name, cls)
 
 

@@ -228,3 +228,23 @@ def search_dirs() -> list[Path]:
     dirs = [Path(p) for p in os.environ.get("BRDFREMAP_RENDERERS", "").split(os.pathsep) if p]
     dirs += [Path.cwd() / "configs" / "renderers", Path.home() / ".config" / "brdfremap" / "renderers"]
     return [d for d in dict.fromkeys(dirs) if d.is_dir()]
+
+
+def broken_definition(path: Path, error: str) -> type[Adapter]:
+    """A stand-in for a definition file that does not validate: `remap adapters` lists it
+    as unavailable with the error, and choosing it reports the same."""
+
+    class Broken(Adapter):
+        name = Path(path).stem
+        summary = f"external renderer definition {path}"
+        install_hint = f"fix {path}"
+        models: dict = {}
+
+        @classmethod
+        def unavailable_reason(cls) -> str | None:
+            return f"invalid definition: {error}"
+
+        def render(self, model, params, scene, lobe=None):  # pragma: no cover - never constructed
+            raise RenderError(error)
+
+    return Broken

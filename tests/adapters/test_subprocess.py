@@ -142,3 +142,13 @@ def test_cli_remap_through_an_external_renderer_file(tmp_path, root):
     assert proc.returncode == 0, proc.stderr
     r = json.loads((out / "result.json").read_text())
     assert np.allclose(r["params"]["albedo"], [0.7, 0.4, 0.2], atol=0.01)
+
+
+def test_an_invalid_definition_in_a_renderer_folder_is_listed_with_its_error(tmp_path, monkeypatch, capsys):
+    from brdfremap.core.cli import main
+
+    (tmp_path / "typo.yaml").write_text('name: typo\ncomand: ["x"]\nmodels: {}\n')
+    monkeypatch.setenv("BRDFREMAP_RENDERERS", str(tmp_path))
+    assert main(["adapters"]) == 0
+    out = capsys.readouterr().out
+    assert "typo" in out and "invalid definition" in out and "comand: unknown field" in out
