@@ -41,11 +41,11 @@ class RemapOptions:
     """Resolution where each stage is polished and the verdict taken (used when the scene's
     resolution is at least twice it; else the scene's own). The final error is always
     measured at the scene's resolution."""
-    coarse_tol: float = 1e-3
+    coarse_tol: float = 1e-2
     """ftol and xtol of the coarse level (its optimum is polished at full resolution anyway)."""
     separable_rgb: bool = True
     """Use one render for the three Jacobian columns of an RGB parameter declared separable."""
-    fine_steps: int = 3
+    fine_steps: int = 1
     """With a coarse level: renders allowed at full resolution beyond one Jacobian, per stage."""
     max_renders_per_stage: int = 80
     ftol: float = 1e-4
