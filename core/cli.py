@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -95,6 +96,9 @@ def _fmt_params(params: dict, names: list[str] | None = None) -> str:
 
 
 def cmd_remap(args: argparse.Namespace) -> int:
+    from pydantic import ValidationError
+
+    from .configio import validation_message
     from .plugins import collect_adapters
     from .remap import RemapOptions
     from .scene import ProbeScene, load_scene
@@ -107,18 +111,13 @@ def cmd_remap(args: argparse.Namespace) -> int:
         raise ConfigError("must be a positive fraction such as 0.05", field="--threshold")
     source = load_material(args.source)
     scene = load_scene(args.scene) if args.scene else ProbeScene()
+    overrides = {k: v for k, v in (("resolution", args.resolution), ("spp", args.spp), ("seed", args.seed))
+                 if v is not None}
     try:
-        scene = ProbeScene.model_validate({**scene.model_dump(), **{
-            k: v for k, v in (("resolution", args.resolution), ("spp", args.spp), ("seed", args.seed)) if v is not None}})
-    except Exception as exc:
-        from pydantic import ValidationError
-
-        from .configio import validation_message
-
-        if isinstance(exc, ValidationError):
-            field, msg = validation_message(exc)
-            raise ConfigError(msg, field=f"--{field}") from exc
-        raise
+        scene = ProbeScene.model_validate({**scene.model_dump(), **overrides})
+    except ValidationError as exc:
+        field, msg = validation_message(exc)
+        raise ConfigError(msg, field=f"--{field}") from exc
     registry = collect_adapters()
     args.adapter = registry.resolve(args.adapter)
     entry = registry.get(args.adapter)
@@ -137,10 +136,10 @@ def cmd_remap(args: argparse.Namespace) -> int:
         raise ConfigError("exists and is not a folder", field=f"--out {out}")
     progress = Progress(not args.quiet)
     if not args.quiet:
-        print(f"remap {source.adapter}:{source.model} -> {args.adapter}:{args.model}  "
+        print(f"remap {job.source.adapter}:{source.model} -> {args.adapter}:{args.model}  "
               f"({scene.resolution}x{scene.resolution}, {scene.spp} spp, scheme {args.scheme}; "
               f"fitting {', '.join(job.free) or 'nothing'})", file=sys.stderr, flush=True)
-    with open_adapters(registry, [source.adapter, args.adapter]) as adapters:
+    with open_adapters(registry, [job.source.adapter, args.adapter]) as adapters:
         outcome = run(job, registry, adapters, progress)
         files = write_outputs(outcome, out, adapters[args.adapter])
     r = outcome.result
@@ -203,6 +202,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("remap: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # `remap ... | head`: the reader left; results are already written
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
 
 
 if __name__ == "__main__":
