@@ -246,6 +246,8 @@ def write_outputs(outcome: Outcome, out_dir: Path, target_adapter: Adapter | Non
     """Images first, native material next, result.json last: a result.json always describes a complete run."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
+    # A result.json from an earlier run must not vouch for the images about to be replaced.
+    (out_dir / "result.json").unlink(missing_ok=True)
     src, tgt = outcome.source_image, outcome.result.target_image
     write_exr(out_dir / "source.exr", src)
     write_exr(out_dir / "target.exr", tgt)
