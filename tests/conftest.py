@@ -35,21 +35,22 @@ def need_adapter(factory):
         pytest.skip(f"adapter {factory.name} unavailable: {reason}")
 
 
+def _open_adapter(module: str, name: str):
+    """One adapter for the whole session (one Blender worker, one set of Mitsuba kernels)."""
+    import importlib
+
+    factory = getattr(importlib.import_module(module), name)
+    need_adapter(factory)
+    adapter = factory()
+    yield adapter
+    adapter.close()
+
+
 @pytest.fixture(scope="session")
 def mitsuba_adapter():
-    from brdfremap.adapters.mitsuba.adapter import MitsubaAdapter
-
-    need_adapter(MitsubaAdapter)
-    a = MitsubaAdapter()
-    yield a
-    a.close()
+    yield from _open_adapter("brdfremap.adapters.mitsuba.adapter", "MitsubaAdapter")
 
 
 @pytest.fixture(scope="session")
 def cycles_adapter():
-    from brdfremap.adapters.cycles.adapter import CyclesAdapter
-
-    need_adapter(CyclesAdapter)
-    a = CyclesAdapter()
-    yield a
-    a.close()
+    yield from _open_adapter("brdfremap.adapters.cycles.adapter", "CyclesAdapter")

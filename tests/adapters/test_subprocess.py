@@ -117,14 +117,20 @@ class TestFakeRendererContract(AdapterContract):
     calibration = ("lambert", {"albedo": 0.8})
 
 
-def test_cli_failure_is_exit_2_without_traceback_and_no_result(tmp_path, root):
+def _remap_with_fake(tmp_path, root, reflectance, *extra):
+    """`remap` in a subprocess: a Mitsuba diffuse source to the fake external renderer."""
     mat = tmp_path / "m.yaml"
-    mat.write_text("adapter: mitsuba\nmodel: diffuse\nparams: {reflectance: 0.8}\n")
+    mat.write_text(f"adapter: mitsuba\nmodel: diffuse\nparams: {{reflectance: {reflectance}}}\n")
     out = tmp_path / "out"
     proc = subprocess.run(
         [sys.executable, "-m", "brdfremap.core.cli", "--adapter", str(DATA / "fake-oneshot.yaml"), "--model",
-         "lambert", "--fix", "fault=exit", "--source", str(mat), "--out", str(out), "--quiet", "--resolution", "32"],
+         "lambert", "--source", str(mat), "--out", str(out), "--quiet", "--resolution", "32", *extra],
         capture_output=True, text=True, cwd=root)
+    return proc, out
+
+
+def test_cli_failure_is_exit_2_without_traceback_and_no_result(tmp_path, root):
+    proc, out = _remap_with_fake(tmp_path, root, 0.8, "--fix", "fault=exit")
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr
     assert proc.stderr.startswith("remap: error: renderer 'fake-oneshot' (lambert: albedo=")
@@ -132,13 +138,7 @@ def test_cli_failure_is_exit_2_without_traceback_and_no_result(tmp_path, root):
 
 
 def test_cli_remap_through_an_external_renderer_file(tmp_path, root):
-    mat = tmp_path / "m.yaml"
-    mat.write_text("adapter: mitsuba\nmodel: diffuse\nparams: {reflectance: [0.7, 0.4, 0.2]}\n")
-    out = tmp_path / "out"
-    proc = subprocess.run(
-        [sys.executable, "-m", "brdfremap.core.cli", "--adapter", str(DATA / "fake-oneshot.yaml"), "--model",
-         "lambert", "--source", str(mat), "--out", str(out), "--quiet", "--resolution", "32", "--coarse", "0"],
-        capture_output=True, text=True, cwd=root)
+    proc, out = _remap_with_fake(tmp_path, root, [0.7, 0.4, 0.2], "--coarse", "0")
     assert proc.returncode == 0, proc.stderr
     r = json.loads((out / "result.json").read_text())
     assert np.allclose(r["params"]["albedo"], [0.7, 0.4, 0.2], atol=0.01)
