@@ -46,6 +46,16 @@ class Adapter(abc.ABC):
         """Runtime facts for reports (renderer version, variant, device)."""
         return {}
 
+    def derived(self, model: str, params: dict[str, Value]) -> dict[str, Value]:
+        """Quantities that follow from the parameters, for reports and experiment plots (e.g. a
+        conductor's normal-incidence reflectivity from its complex IOR). Must not render."""
+        return {}
+
+    def notes(self, model: str, params: dict[str, Value]) -> list[str]:
+        """What the renderer does to these parameters that the image cannot show the optimiser,
+        e.g. a reflectance it trims to conserve energy. A note makes a fitted result unreliable."""
+        return []
+
     def write_native(self, model: str, params: dict[str, Value], out_dir: Path) -> list[Path]:
         """Write the material in the renderer's own form; return the files written."""
         return []

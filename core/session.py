@@ -158,6 +158,7 @@ def run(job: Job, registry: AdapterRegistry, adapters: dict[str, Adapter], progr
     # The error two renders of the same material show, source and target noise combined:
     # n_x is the difference of two seeds (√2 σ_x), so the floor is sqrt((n_s² + n_t²) / 2).
     target_noise = relative_rmse(result.target_image, tgt(result.params, scene=job.scene.with_(seed=job.scene.seed + 1)))
+    _renderer_notes(result, adapters[job.target_adapter].notes(job.target_model, result.params))
     # Renders the target adapter actually made: the engine's count includes repeats the cache served.
     result.renders = tgt_cache.misses
     noise_floor = math.sqrt((source_noise**2 + target_noise**2) / 2)
@@ -166,6 +167,16 @@ def run(job: Job, registry: AdapterRegistry, adapters: dict[str, Adapter], progr
     return Outcome(job, result, source_image, noise_floor, src_cache.misses, info,
                    noise={"source": source_noise, "target": target_noise},
                    renders_by_resolution=dict(sorted(tgt.by_resolution.items())))
+
+
+def _renderer_notes(result: RemapResult, notes: list[str]) -> None:
+    """The renderer altered the fitted parameters (trimmed them): the values do not mean what they say."""
+    if not notes:
+        return
+    result.notes = list(notes) + list(result.notes)
+    why = "the renderer trims the fitted parameters (" + notes[0].split(":")[0] + ")"
+    result.reason = why if result.reliable else f"{result.reason}; {why}"
+    result.reliable = False
 
 
 def _finite_or_none(x: float | None) -> float | None:

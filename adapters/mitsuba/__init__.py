@@ -8,3 +8,10 @@ def brdfremap_register_adapters(register):
     from .adapter import MitsubaAdapter
 
     register("mitsuba", MitsubaAdapter)
+
+
+def register_bsdfs() -> None:
+    """Register the ward, phong and ashikhmin_shirley Python BSDFs with Mitsuba (after set_variant)."""
+    from .bsdfs import register_bsdfs as _register
+
+    _register()

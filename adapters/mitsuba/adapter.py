@@ -17,6 +17,7 @@ from brdfremap.core.protocol import Adapter
 from brdfremap.core.scene import ProbeScene
 from brdfremap.core.schemas import Value
 
+from .bsdfs import conductor_preset, eta_k_from_reflectivity, reflectivity_edge_tint, register_bsdfs, trim_scale
 from .models import MODELS
 from .variant import as_dict, choose_variant
 
@@ -44,6 +45,29 @@ def bsdf_dict(model: str, p: dict[str, Value]) -> dict[str, Any]:
                 "specular_reflectance": _rgb(p["specular_reflectance"])}
     if model == "diffuse":
         return {"type": "diffuse", "reflectance": _rgb(p["reflectance"])}
+    if model in ("ward", "phong"):
+        d = {"type": model, "ensure_energy_conservation": p["ensure_energy_conservation"] == "true",
+             "specular_reflectance": _rgb(p["specular_reflectance"]),
+             "diffuse_reflectance": _rgb(p["diffuse_reflectance"])}
+        if model == "ward":
+            d.update(variant=p["variant"], alpha=p["alpha"])
+        else:
+            d["exponent"] = p["exponent"]
+        return d
+    if model == "ashikhmin_shirley":
+        d = {"type": "ashikhmin_shirley", "form": "conductor", "alpha": p["alpha"],
+             "specular_reflectance": _rgb(p["specular_reflectance"])}
+        if p["material"] == "none":
+            d.update(eta=_rgb(p["eta"]), k=_rgb(p["k"]))
+        elif p["material"] == "reflectivity":
+            d.update(reflectivity=_rgb(p["reflectivity"]), edge_tint=_rgb(p["edge_tint"]))
+        else:
+            d["material"] = p["material"]
+        return d
+    if model == "ashikhmin_shirley_plastic":
+        return {"type": "ashikhmin_shirley", "form": "plastic", "alpha": p["alpha"], "int_ior": p["int_ior"],
+                "ext_ior": EXT_IOR, "diffuse_reflectance": _rgb(p["diffuse_reflectance"]),
+                "specular_reflectance": _rgb(p["specular_reflectance"])}
     if model == "principled":
         d: dict[str, Any] = {"type": "principled", "base_color": _rgb(p["base_color"])}
         for name in ("metallic", "roughness", "specular", "spec_tint", "anisotropic", "sheen", "sheen_tint",
@@ -53,11 +77,40 @@ def bsdf_dict(model: str, p: dict[str, Value]) -> dict[str, Any]:
     raise ConfigError(f"mitsuba adapter has no model {model!r}")
 
 
-def _traverse_value(model: str, name: str, v: Value) -> tuple[str, Any]:
-    """Traverse key (relative to the BSDF) and value for a numeric parameter."""
-    if model == "roughplastic" and name == "int_ior":
-        return "eta", float(v) / EXT_IOR  # type: ignore[arg-type]
-    return name, v
+def traverse_values(model: str, spec, p: dict[str, Value]) -> dict[str, Any]:
+    """The BSDF's traverse keys (relative to the BSDF) and values for the active numeric parameters."""
+    out: dict[str, Any] = {}
+    for ps in spec.parameters:
+        if ps.kind == "choice" or not spec.is_active(ps.name, p):
+            continue
+        v = p[ps.name]
+        out[ps.name] = list(v) if isinstance(v, tuple) else float(v)  # type: ignore[arg-type]
+    if model == "roughplastic":
+        out["eta"] = out.pop("int_ior") / EXT_IOR
+    if model == "ashikhmin_shirley" and "reflectivity" in out:
+        eta, k = eta_k_from_reflectivity(out.pop("reflectivity"), out.pop("edge_tint"))
+        out["eta"], out["k"] = [float(x) for x in eta], [float(x) for x in k]
+    return out
+
+
+def energy_notes(model: str, p: dict[str, Value]) -> list[str]:
+    """What Mitsuba 0.5's energy-conservation safeguard does to these parameters, if anything."""
+    if model not in ("ward", "phong", "ashikhmin_shirley_plastic") or p.get("ensure_energy_conservation") == "false":
+        return []
+    if model == "ashikhmin_shirley_plastic":
+        pairs = [("specular_reflectance", p["specular_reflectance"], (0.0,) * 3),
+                 ("diffuse_reflectance", p["diffuse_reflectance"], (0.0,) * 3)]
+    else:
+        pairs = [("specular_reflectance + diffuse_reflectance", p["specular_reflectance"], p["diffuse_reflectance"])]
+    notes = []
+    for label, a, b in pairs:
+        s = trim_scale(a, b)
+        if s < 1.0:
+            peak = max(x + y for x, y in zip(a, b))  # type: ignore[arg-type]
+            notes.append(f"{model} trims its reflectance: max({label}) = {peak:.3g} > 1, so the renderer scales "
+                         f"it by {s:.3g} (Mitsuba 0.5's energy-conservation safeguard); any larger value renders "
+                         "the same, so the fitted value is not the one that renders")
+    return notes
 
 
 def bsdf_xml(model: str, p: dict[str, Value]) -> str:
@@ -101,6 +154,10 @@ class MitsubaAdapter(Adapter):
         except Exception as exc:
             raise RenderError(f"mitsuba cannot use variant {self.choice.variant!r}: {exc}") from exc
         self.mi = mi
+        try:
+            register_bsdfs()
+        except Exception as exc:
+            raise RenderError(f"cannot register the ward/phong/ashikhmin_shirley plugins: {exc}") from exc
         # key -> (scene, traverse handle, parameter -> traverse key, values currently set)
         self._scenes: OrderedDict[tuple, tuple[Any, Any, dict[str, str], dict[str, Value]]] = OrderedDict()
 
@@ -146,15 +203,14 @@ class MitsubaAdapter(Adapter):
             raise RenderError(f"mitsuba could not build the {model} scene: {exc}") from exc
         handle = self.mi.traverse(sc)
         keys = {}
-        for p in spec.parameters:
-            if p.kind == "choice":
-                continue
-            tname, _ = _traverse_value(model, p.name, p.default)
+        for tname in traverse_values(model, spec, params):
             for cand in (f"probe.bsdf.{tname}.value", f"probe.bsdf.{tname}"):
                 if cand in handle:
-                    keys[p.name] = cand
+                    keys[tname] = cand
                     break
-        self._scenes[key] = (sc, handle, keys, dict(params))
+            else:
+                raise RenderError(f"mitsuba {model}: the BSDF exposes no parameter {tname!r} to update")
+        self._scenes[key] = (sc, handle, keys, traverse_values(model, spec, params))
         if len(self._scenes) > self.max_scenes:
             self._scenes.popitem(last=False)
         return self._scenes[key]
@@ -164,12 +220,11 @@ class MitsubaAdapter(Adapter):
         p = spec.with_lobe(params, lobe)
         sc, handle, keys, current = self._scene(model, p, scene)
         changed = False
-        for name, key in keys.items():
-            if not spec.is_active(name, p) or current.get(name) == p[name]:
+        for tname, v in traverse_values(model, spec, p).items():
+            if current.get(tname) == v:
                 continue
-            _, v = _traverse_value(model, name, p[name])
-            handle[key] = list(v) if isinstance(v, tuple) else float(v)  # type: ignore[arg-type]
-            current[name] = p[name]
+            handle[keys[tname]] = v
+            current[tname] = v
             changed = True
         if changed:
             # Only when something moved: some BSDFs (roughplastic) redo costly set-up on update.
@@ -180,6 +235,32 @@ class MitsubaAdapter(Adapter):
             raise RenderError(f"mitsuba render failed ({model}, {params}): {exc}") from exc
         return np.array(img, dtype=np.float32)[..., :3]
 
+    def derived(self, model: str, params: dict[str, Value]) -> dict[str, Value]:
+        p = params
+        if model in ("roughconductor", "ashikhmin_shirley"):
+            if p["material"] == "reflectivity":
+                return {"reflectivity": p["reflectivity"], "edge_tint": p["edge_tint"]}
+            eta, k = (p["eta"], p["k"]) if p["material"] == "none" else conductor_preset(str(p["material"]))
+            r, g = reflectivity_edge_tint(eta, k)
+            return {"reflectivity": tuple(float(x) for x in r), "edge_tint": tuple(float(x) for x in g)}
+        if model in ("roughplastic", "ashikhmin_shirley_plastic"):
+            f0 = ((float(p["int_ior"]) - EXT_IOR) / (float(p["int_ior"]) + EXT_IOR)) ** 2  # type: ignore[arg-type]
+            return {"specular_f0": f0}
+        if model in ("ward", "phong"):
+            s = trim_scale(p["specular_reflectance"], p["diffuse_reflectance"]) \
+                if p["ensure_energy_conservation"] == "true" else 1.0
+            return {"energy_scale": s,
+                    "effective_specular_reflectance": tuple(s * x for x in p["specular_reflectance"]),  # type: ignore
+                    "effective_diffuse_reflectance": tuple(s * x for x in p["diffuse_reflectance"])}  # type: ignore
+        return {}
+
+    def notes(self, model: str, params: dict[str, Value]) -> list[str]:
+        return energy_notes(model, params)
+
     def write_native(self, model: str, params: dict[str, Value], out_dir: Path) -> list[Path]:
-        text = f"<!-- brdf-remap: Mitsuba 3 {model} -->\n" + bsdf_xml(model, params)
+        text = f"<!-- brdf-remap: Mitsuba 3 {model} -->\n"
+        if model in ("ward", "phong", "ashikhmin_shirley", "ashikhmin_shirley_plastic"):
+            text += ("<!-- a Python plugin: call brdfremap.adapters.mitsuba.register_bsdfs() after "
+                     "mitsuba.set_variant() before loading -->\n")
+        text += bsdf_xml(model, params)
         return [write_text_atomic(Path(out_dir) / "material.xml", text)]

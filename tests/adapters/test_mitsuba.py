@@ -34,6 +34,12 @@ def test_roughplastic_lobes_sum_to_the_full_image(mitsuba_adapter):
     ("roughconductor", dict(eta=[0.2, 0.4, 1.4], k=[3.9, 2.4, 1.6], alpha=0.1), dict(eta=1.0, k=2.0, alpha=0.05)),
     ("roughplastic", dict(alpha=0.1, int_ior=1.5), dict(alpha=0.3, int_ior=1.3, diffuse_reflectance=[0.5, 0.1, 0.1])),
     ("principled", dict(roughness=0.3), dict(roughness=0.5, metallic=0.5, specular=0.8, clearcoat=1.0)),
+    ("ward", dict(alpha=0.1), dict(alpha=0.3, specular_reflectance=[0.9, 0.5, 0.2], diffuse_reflectance=0.3)),
+    ("ward", dict(specular_reflectance=0.5), dict(specular_reflectance=1.4, diffuse_reflectance=0.0)),  # trimmed
+    ("phong", dict(exponent=30.0), dict(exponent=300.0, specular_reflectance=0.7, diffuse_reflectance=0.1)),
+    ("ashikhmin_shirley", dict(alpha=0.1), dict(alpha=0.3, reflectivity=[0.95, 0.6, 0.5], edge_tint=0.9)),
+    ("ashikhmin_shirley_plastic", dict(alpha=0.1, int_ior=1.5), dict(alpha=0.3, int_ior=1.3,
+                                                                      diffuse_reflectance=[0.5, 0.1, 0.1])),
 ])
 def test_in_place_update_equals_a_fresh_scene(mitsuba_adapter, model, a, b):
     from brdfremap.adapters.mitsuba.adapter import MitsubaAdapter
