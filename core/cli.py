@@ -9,13 +9,17 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 from .errors import ConfigError, RemapError
 
 EXIT_USAGE = 2
 
 USAGE_EPILOG = """\
 other commands:
-  remap adapters            list adapters, their models, and why one is unavailable
+  remap adapters                          list adapters, their models, and why one is unavailable
+  remap sweep EXPERIMENT.yaml --out DIR   remap a family of source materials; CSV, plots, cliffs
+  remap roundtrip EXPERIMENT.yaml --out DIR   remap there and back; recovered vs original
 
 examples:
   remap --adapter mitsuba --model roughconductor --fix distribution=ggx \\
@@ -57,6 +61,18 @@ def _remap_parser() -> argparse.ArgumentParser:
 
 def _adapters_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="remap adapters", description="List adapters and their models.")
+    p.add_argument("--debug", action="store_true", help="show tracebacks")
+    return p
+
+
+def _experiment_parser(kind: str) -> argparse.ArgumentParser:
+    what = {"sweep": "Sweep one source parameter, remap every point, and write a CSV, plots and the cliffs found.",
+            "roundtrip": "Remap every point of a sweep to the target and back; plot recovered against original."}
+    p = argparse.ArgumentParser(prog=f"remap {kind}", description=what[kind] + " An interrupted run resumes: "
+                                "finished points in DIR are reused when their inputs are unchanged.")
+    p.add_argument("experiment", metavar="EXPERIMENT.yaml", help="experiment file (see configs/experiments/)")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     return p
 
@@ -187,12 +203,53 @@ def cmd_adapters(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_experiment(kind: str, args: argparse.Namespace) -> int:
+    from .experiments import load_experiment, run_experiment
+    from .plugins import collect_adapters
+
+    exp = load_experiment(args.experiment)
+    if exp.kind != kind:
+        raise ConfigError(f"is a {exp.kind} experiment: run it with `remap {exp.kind}`", file=args.experiment,
+                          field="kind")
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ConfigError("exists and is not a folder", field=f"--out {out}")
+    registry = collect_adapters()
+
+    def progress(line: str) -> None:
+        if not args.quiet:
+            print(line, file=sys.stderr, flush=True)
+
+    r = run_experiment(exp, args.experiment, out, registry, progress)
+    rows = r.rows
+    legs = [x.forward for x in rows] + [x.back for x in rows if x.back is not None]
+    print(f"experiment     {exp.name}" + (f"  ({exp.figure})" if exp.figure else ""))
+    print(f"points         {len(rows)}  ({r.resumed} remaps resumed from {out}/points)")
+    print(f"flagged        {sum(x.flagged for x in rows)}  (unreliable "
+          f"{sum(not x.forward.reliable or (x.back is not None and not x.back.reliable) for x in rows)}, "
+          f"after a cliff {sum(bool(x.cliff) for x in rows)})")
+    print(f"cliffs         {len(r.cliffs)}")
+    for c in r.cliffs:
+        print(f"  {c['why'][0]}")
+    if r.fit:
+        f = r.fit
+        print(f"round trip     slope {f['slope']:.4f}, intercept {f['intercept']:.4f}, R² {f['r2']:.5f}, "
+              f"RMS from unit line {f['rms_from_unit_line']:.4f} over {f['points']} unflagged values")
+    print(f"median error   {np.median([x.forward.relative_rmse for x in rows]):.2%} (forward)")
+    print(f"renders        {sum(leg.renders for leg in legs if not leg.resumed)} target renders this run")
+    print(f"seconds        {r.seconds:.1f}")
+    print(f"wrote          {out}/ ({', '.join(p.name for p in r.files)})")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
     try:
         if argv and argv[0] == "adapters":
             return cmd_adapters(_adapters_parser().parse_args(argv[1:]))
+        if argv and argv[0] in ("sweep", "roundtrip"):
+            return cmd_experiment(argv[0], _experiment_parser(argv[0]).parse_args(argv[1:]))
         return cmd_remap(_remap_parser().parse_args(argv))
     except RemapError as exc:
         if debug:
