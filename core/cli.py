@@ -226,8 +226,9 @@ def cmd_experiment(kind: str, args: argparse.Namespace) -> int:
     print(f"experiment     {exp.name}" + (f"  ({exp.figure})" if exp.figure else ""))
     print(f"points         {len(rows)}  ({r.resumed} remaps resumed from {out}/points)")
     print(f"flagged        {sum(x.flagged for x in rows)}  (unreliable "
-          f"{sum(not x.forward.reliable or (x.back is not None and not x.back.reliable) for x in rows)}, "
-          f"after a cliff {sum(bool(x.cliff) for x in rows)})")
+          f"{sum(x.forward.unstable or (x.back is not None and x.back.unstable) for x in rows)}, "
+          f"after a cliff {sum(bool(x.cliff) for x in rows)}); above the error threshold by model mismatch "
+          f"alone: {sum(x.mismatch for x in rows)}")
     print(f"cliffs         {len(r.cliffs)}")
     for c in r.cliffs:
         print(f"  {c['why'][0]}")

@@ -106,6 +106,8 @@ class CliffSpec(_Strict):
     min_step: float = Field(0.002, ge=0, description="Steps below this fraction of a parameter's range (of the "
                                                     "error for the error series) never count.")
     error: bool = Field(True, description="Also look for jumps in the relative RMSE.")
+    error_min_step: float = Field(0.005, ge=0, description="Error jumps below this (0.005: half a point of "
+                                                          "relative RMSE) never count.")
 
 
 class Experiment(_Strict):
@@ -166,7 +168,13 @@ class Leg:
     reason: str
     notes: list[str]
     fitted: list[str]
+    verdict: str = "ok"
     resumed: bool = False
+
+    @property
+    def unstable(self) -> bool:
+        """Unreliable for a reason other than a converged model mismatch (trimmed, pinned, ...)."""
+        return self.verdict == "unreliable"
 
 
 @dataclass
@@ -179,7 +187,14 @@ class Row:
 
     @property
     def flagged(self) -> bool:
-        return bool(self.cliff) or not self.forward.reliable or (self.back is not None and not self.back.reliable)
+        """After a cliff, or a leg unreliable for a reason other than a plain model mismatch."""
+        return bool(self.cliff) or self.forward.unstable or (self.back is not None and self.back.unstable)
+
+    @property
+    def mismatch(self) -> bool:
+        """Not flagged, but a leg's error is above the threshold: the closest the target model gets."""
+        legs = [self.forward] + ([self.back] if self.back is not None else [])
+        return not self.flagged and any(leg.verdict == "mismatch" for leg in legs)
 
     def why(self) -> str:
         parts = list(self.cliff)
@@ -222,8 +237,10 @@ def _jsonable(v: Any) -> Any:
 def _leg_from_doc(doc: dict, derived: dict[str, Value]) -> Leg:
     m = doc["metrics"]
     params = {k: tuple(v) if isinstance(v, list) else v for k, v in doc["params"].items()}
+    verdict = doc.get("verdict") or ("ok" if doc["reliable"] else "unreliable")
     return Leg(params, derived, m["relative_rmse"], m["perceptual"], m["noise_floor"], doc["renders"],
-               doc["seconds"], doc["reliable"], doc["reason"], doc.get("notes", []), doc["fitted"], resumed=True)
+               doc["seconds"], doc["reliable"], doc["reason"], doc.get("notes", []), doc["fitted"], verdict,
+               resumed=True)
 
 
 def _matches(doc: dict, source: Material, source_params: dict, target: TargetSide, fixed: dict, scene: ProbeScene,
@@ -245,28 +262,37 @@ def _matches(doc: dict, source: Material, source_params: dict, target: TargetSid
 
 
 def find_cliffs(x: list[float], y: list[float], k: float, window: int, min_step: float) -> list[tuple[int, int, float]]:
-    """Steps of y (ordered by x) larger than k times the median of the neighbouring steps.
+    """Steps of y (ordered by x) larger than k times what the neighbouring steps lead one to expect.
 
-    Returns (index before, index after, ratio to the neighbours' median) with indices into
-    the given lists. ``min_step`` is an absolute floor: no step below it is a cliff, and
-    neighbours' medians below it count as it (a flat run does not make noise a cliff).
+    On evenly spaced x that is k times the median of the neighbouring steps (up to ``window``
+    on each side). Where x is uneven (a sweep over named materials), each step is compared
+    with the neighbours' median slope times its own width in x, so a gap between clusters
+    of materials is not a cliff. Returns (index before, index after, ratio) with indices
+    into the given lists. ``min_step`` is an absolute floor: no step below it is a cliff,
+    and an expectation below it counts as it (a flat run does not make noise a cliff).
     A lone outlier (a jump and an opposite jump straight back) is one cliff, reported as
     (its neighbour, the outlier)."""
     if len(x) < 3:
         return []
-    order = np.argsort(np.asarray(x, dtype=float), kind="stable")
-    ys = np.asarray(y, dtype=float)[order]
+    xs_all = np.asarray(x, dtype=float)
+    order = np.argsort(xs_all, kind="stable")
+    xs, ys = xs_all[order], np.asarray(y, dtype=float)[order]
     diffs = np.diff(ys)
     steps = np.abs(diffs)
+    dx = np.diff(xs)
+    tiny = 1e-9 * max(float(np.ptp(xs)), 1e-30)
+    slopes = np.where(dx > tiny, steps / np.maximum(dx, tiny), np.nan)
     big = []
     for j, s in enumerate(steps):
-        # The neighbours exclude the steps beside this one when those are cliffs themselves.
-        neigh = np.concatenate([steps[max(0, j - window):j], steps[j + 1:j + 1 + window]])
-        if neigh.size == 0 or s <= min_step:
+        if s <= min_step:
             continue
-        med = max(float(np.median(neigh)), min_step)
-        if s > k * med:
-            big.append((j, float(s / med)))
+        near = np.concatenate([slopes[max(0, j - window):j], slopes[j + 1:j + 1 + window]])
+        near = near[np.isfinite(near)]
+        if near.size == 0:
+            continue
+        expected = max(float(np.median(near)) * float(dx[j]), min_step)
+        if s > k * expected:
+            big.append((j, float(s / expected)))
     out, skip = [], set()
     for n, (j, ratio) in enumerate(big):
         if j in skip:
@@ -285,12 +311,12 @@ def find_cliffs(x: list[float], y: list[float], k: float, window: int, min_step:
 def quantity(row: Row, name: str) -> Value | None:
     side, key = name.split(".", 1)
     if side == "source":
-        src = row.source
-        return src.get(key)
+        return row.source.get(key)
     leg = row.forward if side == "target" else row.back
     if leg is None:
         return None
-    return leg.params.get(key, leg.derived.get(key))
+    # Derived first: it is computed from the active parameters (an inactive default may share its name).
+    return leg.derived.get(key, leg.params.get(key))
 
 
 def channels(v: Value | None, mode: str) -> list[float]:
@@ -399,13 +425,14 @@ def run_experiment(exp: Experiment, file: str, out: Path, registry: AdapterRegis
             r = outcome.result
             return Leg(dict(r.params), adapters[adapter_name].derived(side.model, r.params), r.relative_rmse,
                        r.perceptual, outcome.noise_floor, r.renders, r.seconds, r.reliable, r.reason, list(r.notes),
-                       list(r.fitted))
+                       list(r.fitted), r.verdict)
 
         for i, p in enumerate(points):
             src_mat = Material(adapter=names[0], model=exp.source.model, params=p.params, name=p.id)
             src_spec = registry.get(names[0]).models[exp.source.model]
             src_params = src_spec.complete(p.params, file=file, prefix=f"point {p.id}")
-            source = {**adapters[names[0]].derived(exp.source.model, src_params), **src_params}
+            active = {k: v for k, v in src_params.items() if src_spec.is_active(k, src_params)}
+            source = {**active, **adapters[names[0]].derived(exp.source.model, src_params)}
             where = out / "points" / p.id
             fwd = leg(src_mat, f"{file} point {p.id}", exp.target, names[1], tgt_fixed, where)
             row = Row(p, source, fwd)
@@ -456,7 +483,8 @@ def detect_cliffs(exp: Experiment, rows: list[Row], registry: AdapterRegistry, n
             label = pname + ("" if ps.size == 1 else "[" + "rgb"[c] + "]")
             series.append((label, c, ps.scale, span, lambda r, n=pname: r.forward.params.get(n)))
     if exp.cliff.error:
-        series.append(("error", 0, "linear", 1.0, lambda r: r.forward.relative_rmse))
+        series.append(("error", 0, "linear", exp.cliff.error_min_step / max(exp.cliff.min_step, 1e-12),
+                       lambda r: r.forward.relative_rmse))
     for idx in by_group.values():
         for label, c, scale, span, get in series:
             xv, yv, members, shown = [], [], [], []
@@ -491,7 +519,7 @@ def roundtrip_fit(exp: Experiment, rows: list[Row]) -> dict[str, float]:
         if r.flagged or r.back is None:
             continue
         a = channels(r.source.get(name), exp.plot.channels)
-        b = channels(r.back.params.get(name, r.back.derived.get(name)), exp.plot.channels)
+        b = channels(r.back.derived.get(name, r.back.params.get(name)), exp.plot.channels)
         xs += a[:len(b)]
         ys += b[:len(a)]
     if len(xs) < 2 or np.ptp(xs) == 0:
@@ -526,6 +554,7 @@ def _leg_cells(prefix: str, leg: Leg) -> dict[str, Any]:
     d.update({f"{prefix}relative_rmse": f"{leg.relative_rmse:.5f}", f"{prefix}perceptual": f"{leg.perceptual:.3f}",
               f"{prefix}noise_floor": f"{leg.noise_floor:.5f}", f"{prefix}renders": leg.renders,
               f"{prefix}seconds": f"{leg.seconds:.3f}", f"{prefix}reliable": leg.reliable,
+              f"{prefix}verdict": leg.verdict,
               f"{prefix}reason": "" if leg.reliable else leg.reason})
     return d
 
@@ -544,6 +573,7 @@ def write_csv(path: Path, exp: Experiment, rows: list[Row]) -> Path:
             rec.update(_leg_cells("back.", r.back))
         rec["cliff"] = bool(r.cliff)
         rec["flagged"] = r.flagged
+        rec["mismatch"] = r.mismatch
         rec["why"] = r.why()
         records.append(rec)
     columns: list[str] = []
@@ -565,7 +595,9 @@ def summary(result: ExperimentResult) -> dict[str, Any]:
         "figure": result.exp.figure,
         "points": len(rows),
         "flagged": sum(r.flagged for r in rows),
-        "unreliable": sum(not r.forward.reliable or (r.back is not None and not r.back.reliable) for r in rows),
+        "unstable": sum(r.forward.unstable or (r.back is not None and r.back.unstable) for r in rows),
+        "after_a_cliff": sum(bool(r.cliff) for r in rows),
+        "model_mismatch_only": sum(r.mismatch for r in rows),
         "cliffs": [{"before": rows[c["before"]].point.id, "after": rows[c["after"]].point.id, "why": c["why"]}
                    for c in result.cliffs],
         "roundtrip_fit_unflagged": result.fit,

@@ -43,14 +43,14 @@ def _name(q: str) -> str:
 def _points(exp: "Experiment", rows: list["Row"], xq: str, yq: str):
     from .experiments import channels, quantity
 
-    out = []  # (group label, x, y, flagged, cliff, channel)
+    out = []  # (group label, x, y, flagged, cliff, channel, mismatch)
     for r in rows:
         xs = channels(quantity(r, xq), exp.plot.channels)
         ys = channels(quantity(r, yq), exp.plot.channels)
         n = min(len(xs), len(ys))
         for c in range(n):
             out.append((r.point.group, xs[c] if len(xs) > 1 else xs[0], ys[c] if len(ys) > 1 else ys[0],
-                        r.flagged, bool(r.cliff), c if n > 1 else None))
+                        r.flagged, bool(r.cliff), c if n > 1 else None, r.mismatch))
     return out
 
 
@@ -78,10 +78,14 @@ def sweep_plot(base: Path, exp: "Experiment", rows: list["Row"]) -> Path:
             label = _group_label(exp, g) if ch in (None, 0) else None
             ax.plot(x, y, "-", color=color, lw=0.8, alpha=0.6)
             ax.plot(x, y, markers[ch], color=color, ms=3.5, label=label, ls="none")
+    mm = [p for p in pts if p[6]]
+    if mm:
+        ax.plot([p[1] for p in mm], [p[2] for p in mm], "s", mfc="none", mec="0.55", ms=6, mew=0.8, ls="none",
+                label="error above threshold (model mismatch)")
     bad = [p for p in pts if p[3]]
     if bad:
         ax.plot([p[1] for p in bad], [p[2] for p in bad], "x", color="crimson", ms=6, mew=1.2, ls="none",
-                label="unreliable or cliff")
+                label="unreliable (trimmed, pinned, ...) or cliff")
     cl = [p for p in pts if p[4]]
     if cl:
         ax.plot([p[1] for p in cl], [p[2] for p in cl], "o", mfc="none", mec="black", ms=9, mew=1.0, ls="none",
@@ -90,7 +94,7 @@ def sweep_plot(base: Path, exp: "Experiment", rows: list["Row"]) -> Path:
     ax.set_ylabel(exp.plot.ylabel or f"{exp.target.model}: {_name(exp.plot.y)}")
     n_cliffs = sum(bool(r.cliff) for r in rows)
     title = exp.plot.title or exp.name
-    ax.set_title(f"{title}\n{len(rows)} points, {sum(r.flagged for r in rows)} flagged, {n_cliffs} cliffs"
+    ax.set_title(f"{title}\n{len(rows)} points, {sum(r.flagged for r in rows)} flagged, {n_cliffs} after a cliff"
                  + (f"  (channels: {'R ○ G □ B △'})" if exp.plot.channels == "each" else ""), fontsize=9)
     ax.legend(fontsize=7, loc="best")
     path = _save(fig, base)

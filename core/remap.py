@@ -152,6 +152,9 @@ class RemapResult:
     seconds: float
     reliable: bool
     reason: str
+    verdict: str = "ok"
+    """"ok"; "mismatch": only the error is above the threshold, and the fit converged with
+    nothing pinned or ill-conditioned (the closest the target model gets); "unreliable": anything else."""
     stages: list[StageResult] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     jacobian_condition: float | None = None
@@ -417,14 +420,15 @@ def remap(
                 params, final, err = refined, final_r, err_r
                 reasons, cond, _ = _verdict(target, params, free, fine.source, fine_norm, fine.render, err,
                                             options, counter, notes)
-    if len(reasons) == 1 and err > options.threshold and all(r.status.startswith("converged") for r in results):
+    mismatch = len(reasons) == 1 and err > options.threshold and all(r.status.startswith("converged") for r in results)
+    if mismatch:
         reasons[0] += (" although the fit converged with no parameter pinned and a well-conditioned Jacobian:"
                        " a model mismatch (the closest this target model gets), not a failed fit")
     return RemapResult(
         params=params, fitted=list(free), scheme=options.scheme, scheme_used=scheme_used,
         relative_rmse=err, perceptual=delta_e_itp(source, final), renders=counter[0],
         seconds=time.perf_counter() - t0, reliable=not reasons, reason="; ".join(reasons) or "ok",
-        stages=results, notes=notes, jacobian_condition=cond, target_image=final,
+        verdict="ok" if not reasons else ("mismatch" if mismatch else "unreliable"), stages=results, notes=notes, jacobian_condition=cond, target_image=final,
     )
 
 

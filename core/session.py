@@ -177,6 +177,7 @@ def _renderer_notes(result: RemapResult, notes: list[str]) -> None:
     why = "the renderer trims the fitted parameters (" + notes[0].split(":")[0] + ")"
     result.reason = why if result.reliable else f"{result.reason}; {why}"
     result.reliable = False
+    result.verdict = "unreliable"
 
 
 def _finite_or_none(x: float | None) -> float | None:
@@ -239,6 +240,7 @@ def result_document(outcome: Outcome) -> dict[str, Any]:
         "scheme": r.scheme,
         "scheme_used": r.scheme_used,
         "reliable": r.reliable,
+        "verdict": r.verdict,
         "reason": r.reason,
         "notes": r.notes,
         "stages": [

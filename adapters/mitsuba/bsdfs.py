@@ -111,7 +111,13 @@ def conductor_preset(name: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """RGB eta and k of a Mitsuba 3 conductor preset, as Mitsuba's own roughconductor reads them."""
     import mitsuba as mi
 
-    bsdf = mi.load_dict({"type": "roughconductor", "material": name})
+    logger = mi.logger() if hasattr(mi, "logger") else mi.Thread.thread().logger()
+    level = logger.log_level()
+    logger.set_log_level(mi.LogLevel.Error)  # some presets' spectra clamp slightly out of gamut: not news here
+    try:
+        bsdf = mi.load_dict({"type": "roughconductor", "material": name})
+    finally:
+        logger.set_log_level(level)
     params = mi.traverse(bsdf)
 
     def rgb(key):
@@ -157,7 +163,7 @@ TABLE_SIZE = 64
 
 
 @lru_cache(maxsize=256)
-def rough_transmittance_table(alpha: float, eta: float, n_m: int = 48) -> tuple[tuple[float, ...], float]:
+def rough_transmittance_table(alpha: float, eta: float, n_m: int = 32) -> tuple[tuple[float, ...], float]:
     """Transmittance of a rough (AS-distribution) dielectric interface, for the plastic's diffuse term.
 
     T(mu) = 1 - (albedo of the interface's specular reflection at cos(theta_i) = mu), by quadrature
@@ -183,7 +189,7 @@ def rough_transmittance_table(alpha: float, eta: float, n_m: int = 48) -> tuple[
     mus = np.linspace(0.0, 1.0, TABLE_SIZE)
     t_ext = np.clip(1.0 - albedo(mus, eta), 0.0, 1.0)
     # Cosine-weighted hemispherical average of the internal transmittance (midpoint rule in mu^2).
-    n_int = 64
+    n_int = 32
     mu_i = np.sqrt((np.arange(n_int) + 0.5) / n_int)
     t_int = np.clip(1.0 - albedo(mu_i, 1.0 / eta), 0.0, 1.0).mean()
     return tuple(float(x) for x in t_ext), float(1.0 - t_int)
@@ -501,6 +507,8 @@ def register_bsdfs() -> None:
             else:
                 self.scale = 1.0
                 self.ks_eff = opaque_color(ks)
+                # Values set through traverse arrive as literals: opaque, or each change recompiles.
+                self.eta_eff, self.k_eff = opaque_color(host(self.eta)), opaque_color(host(self.k))
             au, av = max(host1(self.alpha_u), ALPHA_MIN), max(host1(self.alpha_v), ALPHA_MIN)
             self.au_h, self.av_h = au, av
             self.au, self.av = opaque_float(au), opaque_float(av)
@@ -570,7 +578,7 @@ def register_bsdfs() -> None:
         def _fresnel_conductor(self, c):
             c2 = c * c
             s2 = 1.0 - c2
-            eta, k = self.eta, self.k
+            eta, k = self.eta_eff, self.k_eff
             t1 = eta * eta - k * k - s2
             a2pb2 = dr.safe_sqrt(t1 * t1 + 4.0 * k * k * eta * eta)
             a = dr.safe_sqrt(0.5 * (a2pb2 + t1))
