@@ -8,28 +8,8 @@ import pytest
 from brdfremap.core.metrics import relative_rmse
 from brdfremap.core.scene import ProbeScene
 
-WI = ([0.0, 0.0, 1.0], [0.6, 0.2, 0.7745966692414834], [0.9, 0.0, 0.4358898943540673])
-
-# (label, plugin dict, chi2 histogram resolution); sharp lobes need the finer grid.
-CASES = [
-    ("ward balanced", {"type": "ward", "alpha": 0.2, "specular_reflectance": 0.3, "diffuse_reflectance": 0.4}, 101),
-    ("ward original, anisotropic", {"type": "ward", "variant": "ward", "alpha_u": 0.1, "alpha_v": 0.3,
-                                    "specular_reflectance": 0.5, "diffuse_reflectance": 0.0}, 101),
-    ("ward-duer rough", {"type": "ward", "variant": "ward-duer", "alpha": 0.5}, 101),
-    ("ward balanced sharp", {"type": "ward", "alpha": 0.05, "specular_reflectance": 0.8,
-                             "diffuse_reflectance": 0.1}, 201),
-    ("phong", {"type": "phong", "exponent": 20.0}, 101),
-    ("phong sharp", {"type": "phong", "exponent": 200.0, "diffuse_reflectance": 0.0}, 201),
-    ("as conductor Au", {"type": "ashikhmin_shirley", "alpha": 0.3, "material": "Au"}, 101),
-    ("as conductor anisotropic", {"type": "ashikhmin_shirley", "alpha_u": 0.1, "alpha_v": 0.4,
-                                  "material": "Cu"}, 101),
-    ("as conductor sharp", {"type": "ashikhmin_shirley", "alpha": 0.05, "reflectivity": 0.9,
-                            "edge_tint": 0.5}, 201),
-    ("as plastic", {"type": "ashikhmin_shirley", "form": "plastic", "alpha": 0.2, "int_ior": 1.5,
-                    "diffuse_reflectance": 0.5}, 101),
-    ("as plastic sharp", {"type": "ashikhmin_shirley", "form": "plastic", "alpha": 0.05, "int_ior": 1.7,
-                          "diffuse_reflectance": [0.8, 0.2, 0.1]}, 201),
-]
+from brdfremap.adapters.mitsuba.validation import (CHI2_CASES as CASES, FURNACE_CASES as FURNACE, FURNACE_COS,
+                                                   INCIDENT as WI, albedo, chi2, reciprocity)
 
 
 @pytest.fixture(scope="module")
@@ -38,72 +18,21 @@ def mi(mitsuba_adapter):
     return mitsuba_adapter.mi
 
 
-def _uniform_dirs(mi, n, seed):
-    rng = np.random.default_rng(seed)
-    u = mi.Point2f(mi.Float(rng.random(n)), mi.Float(rng.random(n)))
-    return mi.warp.square_to_uniform_hemisphere(u)
-
-
-def albedo(mi, d, mu, n=384):
-    """Directional albedo at cos(theta_i) = mu: stratified uniform-hemisphere quadrature of eval."""
-    import drjit as dr
-
-    bsdf = mi.load_dict(d)
-    u = (np.arange(n) + 0.5) / n
-    u1, u2 = np.meshgrid(u, u)
-    wo = mi.warp.square_to_uniform_hemisphere(mi.Point2f(mi.Float(u1.ravel()), mi.Float(u2.ravel())))
-    si = dr.zeros(mi.SurfaceInteraction3f, n * n)
-    si.wi = mi.Vector3f(float(np.sqrt(1 - mu * mu)), 0.0, float(mu))
-    v = np.array(bsdf.eval(mi.BSDFContext(), si, wo))
-    v = v.reshape(-1, 3) if v.shape[-1] == 3 else v.T
-    return v.mean(axis=0) * 2 * np.pi
-
-
 @pytest.mark.parametrize("label, d, res", CASES, ids=[c[0] for c in CASES])
 @pytest.mark.parametrize("wi", range(len(WI)))
-def test_chi2_sampling_matches_pdf(mi, label, d, res, wi, tmp_path, monkeypatch):
-    import drjit as dr
-    from mitsuba.chi2 import BSDFAdapter, ChiSquareTest, SphericalDomain
-
-    monkeypatch.chdir(tmp_path)  # a rejected test writes chi2_data.py into the working folder
-    sample, pdf = BSDFAdapter(d["type"], d, wi=dr.normalize(mi.ScalarVector3f(WI[wi])))
-    test = ChiSquareTest(domain=SphericalDomain(), sample_func=sample, pdf_func=pdf, sample_dim=3,
-                         res=res, ires=8 if res > 101 else 4, sample_count=1_000_000)
-    assert test.run(), f"{label}: {test.messages}"
+def test_chi2_sampling_matches_pdf(mi, label, d, res, wi):
+    ok, p, log = chi2(mi, d, WI[wi], res)
+    assert ok, f"{label}: {log}"
 
 
 @pytest.mark.parametrize("label, d, res", CASES, ids=[c[0] for c in CASES])
 def test_reciprocity(mi, label, d, res):
-    import drjit as dr
-
-    bsdf = mi.load_dict(d)
-    a, b = _uniform_dirs(mi, 4000, 1), _uniform_dirs(mi, 4000, 2)
-    si = dr.zeros(mi.SurfaceInteraction3f, 4000)
-    si.wi = a
-    f_ab = np.array(bsdf.eval(mi.BSDFContext(), si, b)) / np.array(b.z)
-    si.wi = b
-    f_ba = np.array(bsdf.eval(mi.BSDFContext(), si, a)) / np.array(a.z)
-    rel = np.abs(f_ab - f_ba) / np.maximum(np.abs(f_ab) + np.abs(f_ba), 1e-6)
-    assert rel.max() < 1e-3, label
-
-
-FURNACE = [
-    # Reflectances at their maximum with the safeguard on: white base, perfect specular.
-    {"type": "ward", "alpha": 0.1, "specular_reflectance": 1.5, "diffuse_reflectance": 0.0},  # trimmed to 0.99
-    {"type": "ward", "alpha": 0.5, "specular_reflectance": 0.6, "diffuse_reflectance": 0.6},  # trimmed
-    {"type": "ward", "variant": "ward", "alpha": 0.3, "specular_reflectance": 0.5, "diffuse_reflectance": 0.5},
-    {"type": "phong", "exponent": 2.0, "specular_reflectance": 1.0, "diffuse_reflectance": 0.0},
-    {"type": "phong", "exponent": 100.0, "specular_reflectance": 0.6, "diffuse_reflectance": 0.6},  # trimmed
-    {"type": "ashikhmin_shirley", "alpha": 0.05, "material": "Ag"},
-    {"type": "ashikhmin_shirley", "alpha": 0.3, "material": "Al"},
-    {"type": "ashikhmin_shirley", "form": "plastic", "alpha": 0.3, "int_ior": 1.5, "diffuse_reflectance": 1.0},
-    {"type": "ashikhmin_shirley", "form": "plastic", "alpha": 0.05, "int_ior": 1.9, "diffuse_reflectance": 1.0},
-]
+    assert reciprocity(mi, d) < 1e-3, label
 
 
 @pytest.mark.parametrize("d", FURNACE, ids=[f"{d['type']}-{i}" for i, d in enumerate(FURNACE)])
 def test_white_furnace_albedo_at_most_one(mi, d):
-    for mu in (1.0, 0.7, 0.4, 0.2, 0.1):
+    for mu in FURNACE_COS:
         a = albedo(mi, d, mu).max()
         assert 0.0 < a <= 1.0 + 2e-3, f"albedo {a:.4f} at cos(theta_i) = {mu}"
 
