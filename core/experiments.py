@@ -464,6 +464,11 @@ def run_experiment(exp: Experiment, file: str, out: Path, registry: AdapterRegis
     return result
 
 
+def _point_name(exp: Experiment, row: Row) -> str:
+    extra = f", {exp.groups.param}={_label(row.point.group)}" if exp.groups else ""
+    return f"{row.point.id} ({exp.sweep.param}={_label(row.point.value)}{extra})"
+
+
 def detect_cliffs(exp: Experiment, rows: list[Row], registry: AdapterRegistry, names: list[str]) -> list[dict]:
     """Per curve and per checked parameter (per channel), mark the point after each cliff."""
     spec = registry.get(names[1]).models[exp.target.model]
@@ -501,11 +506,14 @@ def detect_cliffs(exp: Experiment, rows: list[Row], registry: AdapterRegistry, n
             for a, b, ratio in find_cliffs(xv, yv, exp.cliff.k, exp.cliff.window, exp.cliff.min_step * span):
                 ia, ib = members[a], members[b]
                 va, vb = shown[a], shown[b]
-                text = (f"cliff: {label} jumps {va:.3g} -> {vb:.3g} between {rows[ia].point.id} and "
-                        f"{rows[ib].point.id} ({ratio:.1f}x the median neighbouring step)")
+                text = (f"cliff: {label} jumps {va:.3g} -> {vb:.3g} between {_point_name(exp, rows[ia])} and "
+                        f"{_point_name(exp, rows[ib])} ({ratio:.1f}x the median neighbouring step)")
                 key = (min(ia, ib), max(ia, ib))
+                grp = f", {exp.groups.param} {_label(rows[ia].point.group)}" if exp.groups else ""
+                short = (f"{label} {va:.3g}→{vb:.3g} ({_label(rows[ia].point.value)}→"
+                         f"{_label(rows[ib].point.value)}{grp})")
                 if key not in found:
-                    found[key] = {"before": ia, "after": ib, "why": []}
+                    found[key] = {"before": ia, "after": ib, "why": [], "short": short}
                     rows[ib].cliff.append(text)
                 found[key]["why"].append(text)
     return sorted(found.values(), key=lambda c: (c["before"], c["after"]))
@@ -598,11 +606,13 @@ def summary(result: ExperimentResult) -> dict[str, Any]:
         "unstable": sum(r.forward.unstable or (r.back is not None and r.back.unstable) for r in rows),
         "after_a_cliff": sum(bool(r.cliff) for r in rows),
         "model_mismatch_only": sum(r.mismatch for r in rows),
-        "cliffs": [{"before": rows[c["before"]].point.id, "after": rows[c["after"]].point.id, "why": c["why"]}
-                   for c in result.cliffs],
+        "cliffs": [{"before": rows[c["before"]].point.id, "after": rows[c["after"]].point.id, "why": c["why"],
+                    "short": c["short"]} for c in result.cliffs],
         "roundtrip_fit_unflagged": result.fit,
         "median_relative_rmse": float(np.median([r.forward.relative_rmse for r in rows])) if rows else None,
         "renders": int(sum(leg.renders for leg in legs if not leg.resumed)),
+        "renders_all_points": int(sum(leg.renders for leg in legs)),
+        "remap_seconds_all_points": float(sum(leg.seconds for leg in legs)),
         "remaps_resumed": result.resumed,
         "seconds": result.seconds,
         "files": [p.name for p in result.files],
