@@ -53,7 +53,9 @@ class JsonLinesWorker:
         except OSError as exc:
             raise RenderError(f"{self.name}: cannot start {self.argv[0]!r}: {exc}") from exc
         threading.Thread(target=self._pump_answers, args=(self.proc.stdout, self._lines), daemon=True).start()
-        threading.Thread(target=self._pump_stderr, args=(self.proc.stderr, self._stderr), daemon=True).start()
+        self._stderr_pump = threading.Thread(target=self._pump_stderr, args=(self.proc.stderr, self._stderr),
+                                             daemon=True)
+        self._stderr_pump.start()
         self.hello = self._read(self.start_timeout, "start")
         if not self.hello.get("ok"):
             err = self.hello.get("error", "no greeting")
@@ -122,6 +124,8 @@ class JsonLinesWorker:
                 continue
             if line is None:
                 code = self.proc.wait() if self.proc else None
+                # The process is gone; let its last stderr lines arrive before quoting them.
+                self._stderr_pump.join(timeout=2.0)
                 raise _WorkerDied(f"{self.name}: worker exited (code {code}) during {what}{self._tail()}")
             line = line.strip()
             if not line.startswith("{"):

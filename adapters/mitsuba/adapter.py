@@ -130,6 +130,18 @@ def bsdf_xml(model: str, p: dict[str, Value]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _reraise_interrupt(exc: Exception) -> None:
+    """Ctrl-C inside a Python plugin called from Mitsuba's C++ (or inside Dr.Jit's custom op that
+    mi.render is) comes back as another error, with the interrupt in its text or its chain."""
+    seen: BaseException | None = exc
+    for _ in range(8):
+        if seen is None:
+            break
+        if isinstance(seen, KeyboardInterrupt) or "KeyboardInterrupt" in str(seen):
+            raise KeyboardInterrupt from exc
+        seen = seen.__cause__ or seen.__context__
+
+
 class MitsubaAdapter(Adapter):
     name = "mitsuba"
     summary = "Mitsuba 3, in process (llvm_ad_rgb when a working libLLVM is found, else scalar_rgb)"
@@ -200,6 +212,7 @@ class MitsubaAdapter(Adapter):
         try:
             sc = self.mi.load_dict(self.scene_dict(model, params, scene))
         except Exception as exc:
+            _reraise_interrupt(exc)
             raise RenderError(f"mitsuba could not build the {model} scene: {exc}") from exc
         handle = self.mi.traverse(sc)
         keys = {}
@@ -232,6 +245,7 @@ class MitsubaAdapter(Adapter):
         try:
             img = self.mi.render(sc, seed=scene.seed, spp=scene.spp)
         except Exception as exc:
+            _reraise_interrupt(exc)
             raise RenderError(f"mitsuba render failed ({model}, {params}): {exc}") from exc
         return np.array(img, dtype=np.float32)[..., :3]
 

@@ -85,3 +85,33 @@ def test_roundtrip_recovers_the_reflectivity(tmp_path, mitsuba_adapter, capsys):
     assert (out / "roundtrip.png").stat().st_size > 0
     assert (out / "points/00-000/back/result.json").exists()
     assert "round trip     slope" in capsys.readouterr().out
+
+
+def test_an_interrupted_sweep_resumes(tmp_path, mitsuba_adapter):
+    """Ctrl-C mid-sweep: exit 130 without a traceback; the rerun reuses the finished points."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    doc = dict(CONDUCTORS, sweep={"param": "material", "values": ["Au", "Cu", "Cr", "Ag", "Al", "Ni_palik", "W",
+                                                                  "Mo", "Ta", "Rh", "Ir", "Hg"]})
+    path, out = _write(tmp_path, doc), tmp_path / "out"
+    cmd = [sys.executable, "-c", "import sys; from brdfremap.core.cli import main; sys.exit(main())",
+           "sweep", str(path), "--out", str(out), "--quiet"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 120
+    while not (out / "points/00-002/result.json").exists():
+        assert proc.poll() is None and time.time() < deadline, proc.communicate()
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and "Traceback" not in err and "interrupted" in err, err
+    assert not (out / "results.csv").exists()
+    done = sum((out / "points" / p / "result.json").exists() for p in os.listdir(out / "points"))
+    assert 3 <= done < 12
+    rerun = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert rerun.returncode == 0, rerun.stderr
+    assert f"({done} remaps resumed" in rerun.stdout
+    assert len(_rows(out)) == 12
