@@ -7,6 +7,8 @@ For each case (a source material and a target model):
   analytic  today's exporters: fixed formulas (identity α, and α = roughness²); no renders
   floor     the best achievable: one-stage TRF from 8 starts at 128², 64 spp
   default   brdf-remap's default (two-stage, coarse-to-fine, 4 starts, 128², 16 spp)
+  default, unscaled starts   the same without scaling each start's linear parameter (a
+            reflectance its lobe is proportional to): the measure of that speed-up
 Every method's parameters are scored on one evaluation render (128², 64 spp, seed 7) against
 the source rendered alike, so the errors are comparable; renders and seconds are the
 method's own. Ratios are printed per case and as medians."""
@@ -97,6 +99,7 @@ def run_case(reg, adapters, src, target):
             rows[f"analytic {conv}"] = dict(renders=0, seconds=0.0, err=err, de=de, reliable=None)
     fitted("floor", FLOOR, scheme="one", starts=8, coarse_resolution=None, max_renders_per_stage=160)
     fitted("default", DEFAULT)
+    fitted("default, unscaled starts", DEFAULT, linear_starts=False)
     return rows
 
 
@@ -130,7 +133,7 @@ def main():
            "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for target in dict.fromkeys(t for _, t, _ in summary):
         group = [rows for _, t, rows in summary if t == target]
-        for label in ("paper", "analytic identity", "analytic squared", "floor", "default"):
+        for label in ("paper", "analytic identity", "analytic squared", "floor", "default", "default, unscaled starts"):
             rs = [g[label] for g in group if label in g]
             if not rs:
                 continue

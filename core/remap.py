@@ -43,6 +43,9 @@ class RemapOptions:
     measured at the scene's resolution."""
     coarse_tol: float = 1e-2
     """ftol and xtol of the coarse level (its optimum is polished at full resolution anyway)."""
+    linear_starts: bool = True
+    """Give each starting point its best scale of a parameter the stage's image is proportional to
+    (ParamSpec.linear_in), predicted from the start's render: no extra render."""
     separable_rgb: bool = True
     """Use one render for the three Jacobian columns of an RGB parameter declared separable."""
     fine_steps: int = 1
@@ -255,13 +258,48 @@ class _Stage:
             out.append(u)
         return out
 
+    def _linear_slice(self) -> tuple[str, slice] | None:
+        """The one free parameter this stage's image is proportional to, if there is exactly one."""
+        key = self.lobe or "full"
+        hits = [(n, sl) for n, sl in self.space.slices.items() if key in self.space.spec.param(n).linear_in]
+        return hits[0] if len(hits) == 1 else None
+
+    def _rescaled(self, u: np.ndarray, r: np.ndarray, lin: tuple[str, slice]) -> tuple[float, np.ndarray]:
+        """The start with its linear parameter scaled to fit best (per channel for RGB), and the
+        error it will have there, predicted from the image already rendered (no render)."""
+        name, sl = lin
+        spec = self.space.spec.param(name)
+        img = r * self.norm + self.source
+        chans = [slice(c, None, 3) for c in range(3)] if sl.stop - sl.start == 3 else [slice(None)]
+        old = self.space.decode(u)[name]
+        old_vals = old if isinstance(old, tuple) else (old,)
+        new_vals, pred = list(old_vals), r.copy()
+        for j, ch in enumerate(chans):
+            a, b = img[ch], self.source[ch]
+            denom = float(a @ a)
+            if denom <= 0 or old_vals[j] <= 0:
+                continue
+            v = min(max(old_vals[j] * float(a @ b) / denom, spec.lower), spec.upper)
+            new_vals[j] = v
+            pred[ch] = (a * (v / old_vals[j]) - b) / self.norm
+        params = dict(self.space.decode(u))
+        params[name] = tuple(new_vals) if spec.kind == "rgb" else new_vals[0]
+        return float(np.linalg.norm(pred)), self.space.encode(params)
+
     def run(self, u_base: np.ndarray) -> np.ndarray:
         t0 = time.perf_counter()
         status = "converged"
         if self.space.dim == 0:
             return u_base
         try:
-            errs = [(float(np.linalg.norm(self.residual(u))), i, u) for i, u in enumerate(self.starts(u_base))]
+            lin = self._linear_slice() if self.options.linear_starts and not self.polish else None
+            errs = []
+            for i, u in enumerate(self.starts(u_base)):
+                r = self.residual(u)
+                errs.append((float(np.linalg.norm(r)), i, u))
+                if lin is not None:
+                    e, v = self._rescaled(u, r, lin)
+                    errs.append((e, i, v))
             start_err, _, u0 = min(errs, key=lambda t: (t[0], t[1]))
             res = least_squares(
                 self.residual, u0, jac=self.jacobian, bounds=(0.0, 1.0), method=self.options.method,

@@ -32,6 +32,10 @@ class ParamSpec(_Strict):
     separable: bool = Field(True, description="RGB only: each image channel depends on its own component alone "
                                               "(an albedo or tint in an RGB renderer), so one render gives "
                                               "all three Jacobian columns.")
+    linear_in: tuple[Literal["full", "diffuse", "specular"], ...] = Field(
+        (), description="Images that are proportional to this parameter, channel by channel (a reflectance that "
+                        "multiplies a lobe): 'diffuse' or 'specular' for that lobe alone, 'full' for the whole "
+                        "material. Each starting point then gets its best scale without a render.")
     active_when: dict[str, tuple[str, ...]] = Field(
         default_factory=dict, description="Only meaningful when these choice parameters take one of these values."
     )

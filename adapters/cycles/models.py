@@ -48,7 +48,7 @@ GLOSSY = ModelSpec(
     parameters=(
         ParamSpec(name="distribution", kind="choice", default="ggx",
                   choices=("beckmann", "ggx", "ashikhmin_shirley", "multi_ggx"), description="Distribution."),
-        ParamSpec(name="color", kind="rgb", default=(0.8, 0.8, 0.8), description="Color."),
+        ParamSpec(name="color", kind="rgb", default=(0.8, 0.8, 0.8), linear_in=("full", "specular"), description="Color."),
         _unit("roughness", 0.3, desc="Roughness (α = roughness²)."),
     ),
     lobes={"diffuse": LobeSpec(empty=True), "specular": LobeSpec(params=("color", "roughness"))},
@@ -58,7 +58,7 @@ DIFFUSE = ModelSpec(
     name="diffuse",
     description="Diffuse BSDF (Lambertian at roughness 0).",
     parameters=(
-        ParamSpec(name="color", kind="rgb", default=(0.8, 0.8, 0.8), description="Color."),
+        ParamSpec(name="color", kind="rgb", default=(0.8, 0.8, 0.8), linear_in=("full", "diffuse"), description="Color."),
         _unit("roughness", 0.0, fit=False, desc="Oren-Nayar roughness."),
     ),
     lobes={"diffuse": LobeSpec(params=("color", "roughness")), "specular": LobeSpec(empty=True)},

@@ -41,13 +41,12 @@ def test_sweep_writes_csv_plots_and_flags_the_trimmed_point(tmp_path, mitsuba_ad
         assert r["target.reliable"] == "True" and float(r["target.relative_rmse"]) < 0.03
     assert float(rows["00-001"]["target.specular_reflectance_r"]) > 1.5 * float(
         rows["00-001"]["target.specular_reflectance_b"])
-    # Gold's red and all of silver need a Ward reflectance above 1, which Mitsuba 0.5's safeguard
-    # trims: flagged, and the row says why.
-    for p in ("00-000", "00-003"):
-        r = rows[p]
-        assert r["flagged"] == "True" and "trims" in r["why"] and r["target.verdict"] == "unreliable"
-        assert float(r["target.energy_scale"]) < 1.0
-    assert float(rows["00-003"]["source.reflectivity_r"]) > 0.95
+    # Silver needs a Ward reflectance above 1, which Mitsuba 0.5's safeguard trims: flagged, and the
+    # row says why. (Gold's red channel sits right at 1.)
+    ag = rows["00-003"]
+    assert ag["flagged"] == "True" and "trims" in ag["why"] and ag["target.verdict"] == "unreliable"
+    assert float(ag["target.energy_scale"]) < 1.0
+    assert float(ag["source.reflectivity_r"]) > 0.95
     summary = json.loads((out / "summary.json").read_text())
     assert summary["points"] == 4 and summary["flagged"] >= 1 and summary["renders"] > 0
     first = capsys.readouterr().out
