@@ -46,6 +46,8 @@ def main() -> int:
         if s["cliffs"]:
             shutil.copyfile(out / "cliff-1.png", docs / f"{path.stem}-cliff.png")
             images.append(f"experiments/{path.stem}-cliff.png")
+        else:
+            (docs / f"{path.stem}-cliff.png").unlink(missing_ok=True)  # from an earlier run
         fit = s["roundtrip_fit_unflagged"]
         rt = (f"slope {fit['slope']:.3f}, R² {fit['r2']:.4f} ({fit['points']} values)" if fit else "")
         cliffs = "; ".join(c["short"] for c in s["cliffs"][:3])
