@@ -25,6 +25,9 @@ class RenderCache:
         self.hits = 0
         self.misses = 0
 
+    def __contains__(self, key: str) -> bool:
+        return key in self._items
+
     def get_or_render(self, key: str, render: Callable[[], np.ndarray]) -> np.ndarray:
         if key in self._items:
             self.hits += 1

@@ -37,6 +37,11 @@ class Adapter(abc.ABC):
         ``params`` is complete and validated (see ``ModelSpec.complete``). ``lobe`` is None for
         the full material, or "diffuse" / "specular" for that lobe alone."""
 
+    def render_batch(self, requests: list[tuple[str, dict[str, Value], ProbeScene, str | None]]) -> list[np.ndarray]:
+        """Several renders (model, params, scene, lobe) at once; an adapter with several workers
+        runs them in parallel. The default renders them one after the other."""
+        return [self.render(*r) for r in requests]
+
     @classmethod
     def environment(cls) -> dict[str, Any]:
         """Facts for `remap adapters` without rendering (version, variant and why). May be slow-ish."""

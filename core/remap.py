@@ -216,6 +216,7 @@ class _Stage:
         J = np.zeros((r0.size, u.size))
         steps = np.where(u + h <= 1.0, h, -h)
         grouped = self.space.separable_groups() if self.options.separable_rgb else []
+        self._prefetch(u, steps, grouped)
         done = set()
         for sl in grouped:
             v = u.copy()
@@ -231,6 +232,28 @@ class _Stage:
             v[j] += steps[j]
             J[:, j] = (self.residual(v) - r0) / steps[j]
         return J
+
+    def _prefetch(self, u: np.ndarray, steps: np.ndarray, grouped: list[slice]) -> None:
+        """Hand the renderer every point of this Jacobian at once when it can render in parallel
+        (``render.many``); the residuals then read them from its cache, counted as before."""
+        many = getattr(self.render, "many", None)
+        if many is None:
+            return
+        points, in_group = [], set()
+        for sl in grouped:
+            v = u.copy()
+            v[sl] += steps[sl]
+            points.append(v)
+            in_group.update(range(sl.start, sl.stop))
+        for j in range(u.size):
+            if j not in in_group:
+                v = u.copy()
+                v[j] += steps[j]
+                points.append(v)
+        todo = [v for v in points if np.round(v, 12).tobytes() not in self._memo]
+        room = self.options.max_renders_per_stage - self.renders
+        if len(todo) >= 2 and room >= 2:
+            many([(self.space.decode(v), self.lobe) for v in todo[:room]])
 
     def _snap_to_bounds(self) -> None:
         """TRF approaches an optimum on a bound from the inside and stops short (metallic

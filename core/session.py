@@ -111,6 +111,37 @@ class _CachedRenderer:
 
         return self.cache.get_or_render(key, render)
 
+    def many(self, items: list[tuple[dict[str, Value], str | None]], scene: ProbeScene | None = None) -> None:
+        """Render the uncached ones of several requests in one batch (in parallel where the adapter can)."""
+        sc = scene or self.scene
+        todo, seen = [], set()
+        for params, lobe in items:
+            key = render_key(self.name, self.model, {k: _round(v) for k, v in params.items()}, sc.cache_key(), lobe)
+            if key not in self.cache and key not in seen:
+                seen.add(key)
+                todo.append((key, params, lobe))
+        if len(todo) < 2:
+            return
+        who = f"adapter {self.name!r} model {self.model!r}"
+        images = self.adapter.render_batch([(self.model, dict(p), sc, lobe) for _, p, lobe in todo])
+        for (key, _, _), img in zip(todo, images):
+            self.by_resolution[sc.resolution] += 1
+            checked = check_image(img, sc, who)
+            self.cache.get_or_render(key, lambda: checked)
+
+
+class _LevelRenderer:
+    """The target at one resolution, as the engine calls it: render(params, lobe), and many(...)."""
+
+    def __init__(self, tgt: _CachedRenderer, scene: ProbeScene):
+        self.tgt, self.scene = tgt, scene
+
+    def __call__(self, params: dict[str, Value], lobe: str | None = None) -> np.ndarray:
+        return self.tgt(params, lobe, scene=self.scene)
+
+    def many(self, items: list[tuple[dict[str, Value], str | None]]) -> None:
+        self.tgt.many(items, scene=self.scene)
+
 
 def _round(v: Value) -> Value:
     if isinstance(v, tuple):
@@ -186,7 +217,7 @@ def _finite_or_none(x: float | None) -> float | None:
 
 def _level(job: Job, src: _CachedRenderer, tgt: _CachedRenderer, scene: ProbeScene) -> Level:
     full, lobes = _source_images(job, src, scene)
-    return Level(lambda p, lobe=None: tgt(p, lobe, scene=scene), full, lobes)
+    return Level(_LevelRenderer(tgt, scene), full, lobes)
 
 
 def _source_images(job: Job, src: _CachedRenderer, scene: ProbeScene):

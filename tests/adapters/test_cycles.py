@@ -3,6 +3,7 @@
 import ast
 import os
 
+import numpy as np
 import pytest
 
 from brdfremap.core.errors import RenderError
@@ -71,3 +72,22 @@ def test_a_failing_render_is_a_render_error_with_blenders_message(cycles_adapter
     with pytest.raises(RenderError, match="cycles: .*"):
         cycles_adapter.worker.request({"op": "render", "model": "nope", "params": {}, "out": "/nonexistent/x.exr",
                                        "scene": {}})
+
+
+def test_a_batch_over_two_workers_equals_one_at_a_time(cycles_adapter):
+    """Parallel finite differences (BRDFREMAP_CYCLES_WORKERS=2) must not change a single pixel."""
+    from brdfremap.core.scene import ProbeScene
+
+    spec, scene = cycles_adapter.models["principled"], ProbeScene(resolution=32)
+    reqs = [("principled", spec.complete({"roughness": 0.21 + 0.03 * i, "metallic": 0.5}), scene, lobe)
+            for i, lobe in enumerate((None, "specular", "diffuse", None, None))]
+    saved = cycles_adapter.n_workers
+    cycles_adapter.n_workers = 2
+    try:
+        batch = cycles_adapter.render_batch(reqs)
+        assert len(cycles_adapter._extra) == 1 and cycles_adapter._extra[0].alive()
+    finally:
+        cycles_adapter.n_workers = saved
+    cycles_adapter._passes.clear()  # render them again, one at a time, in the primary worker
+    for (model, params, sc, lobe), img in zip(reqs, batch):
+        assert np.array_equal(cycles_adapter.render(model, params, sc, lobe), img)

@@ -161,3 +161,56 @@ def test_coarse_to_fine_does_most_renders_at_low_resolution():
     assert abs(res.params["alpha"] / 0.15 - 1) < 0.01 and res.relative_rmse < 1e-3
     assert res.reliable, res.reason
 
+
+
+class _Cached:
+    """A render function with a cache, as the session gives the engine; ``many`` renders a batch."""
+
+    def __init__(self, render, batch: bool):
+        self.render, self.images, self.batches, self.count = render, {}, [], 0
+        if batch:
+            self.many = self._many
+
+    def _key(self, p, lobe):
+        return repr((sorted(p.items()), lobe))
+
+    def __call__(self, p, lobe=None):
+        k = self._key(p, lobe)
+        if k not in self.images:
+            self.count += 1
+            self.images[k] = self.render(p, lobe)
+        return self.images[k]
+
+    def _many(self, items):
+        self.batches.append(len(items))
+        for p, lobe in items:
+            self(p, lobe)
+
+
+def test_a_batched_jacobian_changes_nothing_but_the_grouping():
+    _, render, src, lobes = _setup()
+    base = TOY.complete({})
+    out = {}
+    for batch in (False, True):
+        fn = _Cached(render, batch)
+        out[batch] = (remap(TOY, fn, src, lobes, base=base, free=TOY.fittable(base), options=RemapOptions()), fn)
+    (a, fa), (b, fb) = out[False], out[True]
+    assert a.params == b.params and a.relative_rmse == b.relative_rmse
+    assert fa.count == fb.count and a.renders == b.renders
+    assert fb.batches and min(fb.batches) >= 2  # every Jacobian went out as one batch
+
+
+def test_scaled_starts_fit_a_linear_reflectance_in_fewer_renders():
+    params = tuple(p.model_copy(update={"linear_in": ("diffuse",)}) if p.name == "diffuse" else p
+                   for p in TOY.parameters)
+    spec = TOY.model_copy(update={"parameters": params})
+    adapter, render, src, lobes = _setup()
+    base = spec.complete({"diffuse": (0.05, 0.05, 0.05)})  # a start far too dark
+    res = {}
+    for scaled in (False, True):
+        res[scaled] = remap(spec, render, src, lobes, base=base, free=spec.fittable(base),
+                            options=RemapOptions(linear_starts=scaled))
+    assert np.allclose(res[True].params["diffuse"], (0.6, 0.3, 0.1), atol=2e-3)
+    assert res[True].relative_rmse <= res[False].relative_rmse + 1e-4
+    diffuse = {s: next(st for st in res[s].stages if st.lobe == "diffuse") for s in (False, True)}
+    assert diffuse[True].renders < diffuse[False].renders
