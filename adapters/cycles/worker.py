@@ -32,6 +32,9 @@ class BlenderState:
         per_render = ("width", "height", "spp", "seed")
         key = json.dumps({k: v for k, v in sc_json.items() if k not in per_render}, sort_keys=True)
         if key != self.scene_key:
+            # A build that fails half-way (it starts from factory settings) must not leave the
+            # old key behind: the next request would skip the rebuild and find nodes gone.
+            self.scene_key = None
             self._build(sc_json)
             self.scene_key = key
         scene = self.bpy.context.scene

@@ -72,6 +72,9 @@ def test_a_failing_render_is_a_render_error_with_blenders_message(cycles_adapter
     with pytest.raises(RenderError, match="cycles: .*"):
         cycles_adapter.worker.request({"op": "render", "model": "nope", "params": {}, "out": "/nonexistent/x.exr",
                                        "scene": {}})
+    # The failed request wiped the scene half-way: the worker must rebuild it, not trip over it.
+    cycles_adapter._passes.clear()
+    assert cycles_adapter.render("glossy", _p(cycles_adapter, "glossy", roughness=0.43), SCENE).max() > 0
 
 
 def test_a_batch_over_two_workers_equals_one_at_a_time(cycles_adapter):
