@@ -272,7 +272,7 @@ def find_cliffs(x: list[float], y: list[float], k: float, window: int, min_step:
     and an expectation below it counts as it (a flat run does not make noise a cliff).
     A lone outlier (a jump and an opposite jump straight back) is one cliff, reported as
     (its neighbour, the outlier)."""
-    if len(x) < 3:
+    if len(x) < 4:
         return []
     xs_all = np.asarray(x, dtype=float)
     order = np.argsort(xs_all, kind="stable")
@@ -288,8 +288,8 @@ def find_cliffs(x: list[float], y: list[float], k: float, window: int, min_step:
             continue
         near = np.concatenate([slopes[max(0, j - window):j], slopes[j + 1:j + 1 + window]])
         near = near[np.isfinite(near)]
-        if near.size == 0:
-            continue
+        if near.size < 2:
+            continue  # one neighbour cannot say what is usual: two unequal steps are not a cliff
         expected = max(float(np.median(near)) * float(dx[j]), min_step)
         if s > k * expected:
             big.append((j, float(s / expected)))

@@ -112,3 +112,7 @@ def test_shipped_experiments_load(root):
     for f in files:
         exp = load_experiment(f)
         assert exp.figure and points_of(exp)
+
+
+def test_three_points_are_too_few_to_call_a_cliff():
+    assert find_cliffs([0, 1, 2], [0.0, 0.01, 0.5], K, W, FLOOR) == []
