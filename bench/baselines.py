@@ -13,17 +13,12 @@ from functools import lru_cache
 
 @lru_cache(maxsize=None)
 def preset_eta_k(material: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """RGB eta and k of one of Mitsuba's conductor presets (asks Mitsuba itself)."""
-    import mitsuba as mi
-
+    """RGB eta and k of one of Mitsuba's conductor presets, as the adapter reads them."""
     from brdfremap.adapters.mitsuba.adapter import MitsubaAdapter
+    from brdfremap.adapters.mitsuba.bsdfs import conductor_preset
 
     MitsubaAdapter()  # selects the variant
-    import numpy as np
-
-    params = mi.traverse(mi.load_dict({"type": "roughconductor", "material": material}))
-    eta, k = (np.array(params[key], dtype=np.float64).ravel() for key in ("eta.value", "k.value"))
-    return tuple(float(x) for x in eta), tuple(float(x) for x in k)
+    return conductor_preset(material)
 
 
 def f0(eta, k):

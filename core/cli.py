@@ -160,7 +160,7 @@ def cmd_remap(args: argparse.Namespace) -> int:
         files = write_outputs(outcome, out, adapters[args.adapter])
     r = outcome.result
     rows = [
-        ("params", _fmt_params(r.params, [p.name for p in spec.parameters if spec.is_active(p.name, r.params)])),
+        ("params", _fmt_params(spec.active(r.params))),
         ("relative RMSE", f"{r.relative_rmse:.2%}   (noise floor {outcome.noise_floor:.2%})"),
         ("perceptual", f"{r.perceptual:.2f} mean ΔE_ITP"),
         ("renders", f"{r.renders} target ({', '.join(f'{v} at {k}px' for k, v in outcome.renders_by_resolution.items())})"

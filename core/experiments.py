@@ -234,9 +234,9 @@ def _jsonable(v: Any) -> Any:
     return v
 
 
-def _leg_from_doc(doc: dict, derived: dict[str, Value]) -> Leg:
+def _leg_from_doc(doc: dict, params: dict[str, Value], derived: dict[str, Value]) -> Leg:
+    """A finished leg read back; ``params`` are its parameters completed as a fresh leg has them."""
     m = doc["metrics"]
-    params = {k: tuple(v) if isinstance(v, list) else v for k, v in doc["params"].items()}
     verdict = doc.get("verdict") or ("ok" if doc["reliable"] else "unreliable")
     return Leg(params, derived, m["relative_rmse"], m["perceptual"], m["noise_floor"], doc["renders"],
                doc["seconds"], doc["reliable"], doc["reason"], doc.get("notes", []), doc["fitted"], verdict,
@@ -415,11 +415,11 @@ def run_experiment(exp: Experiment, file: str, out: Path, registry: AdapterRegis
                     doc = json.loads(doc_path.read_text())
                 except (OSError, ValueError):
                     doc = None
-                active = {k: v for k, v in job.source_params.items() if job.source_spec.is_active(k, job.source_params)}
-                if doc and _matches(doc, job.source, active, side, fixed, scene, options):
+                if doc and _matches(doc, job.source, job.source_spec.active(job.source_params), side, fixed, scene,
+                                    options):
                     resumed += 1
-                    params = spec.complete({k: v for k, v in doc["params"].items()})
-                    return _leg_from_doc(doc, adapters[adapter_name].derived(side.model, params))
+                    params = spec.complete(doc["params"])
+                    return _leg_from_doc(doc, params, adapters[adapter_name].derived(side.model, params))
             outcome = run(job, registry, adapters)
             write_outputs(outcome, where, adapters[adapter_name])
             r = outcome.result
@@ -431,8 +431,7 @@ def run_experiment(exp: Experiment, file: str, out: Path, registry: AdapterRegis
             src_mat = Material(adapter=names[0], model=exp.source.model, params=p.params, name=p.id)
             src_spec = registry.get(names[0]).models[exp.source.model]
             src_params = src_spec.complete(p.params, file=file, prefix=f"point {p.id}")
-            active = {k: v for k, v in src_params.items() if src_spec.is_active(k, src_params)}
-            source = {**active, **adapters[names[0]].derived(exp.source.model, src_params)}
+            source = {**src_spec.active(src_params), **adapters[names[0]].derived(exp.source.model, src_params)}
             where = out / "points" / p.id
             fwd = leg(src_mat, f"{file} point {p.id}", exp.target, names[1], tgt_fixed, where)
             row = Row(p, source, fwd)

@@ -150,6 +150,10 @@ class ModelSpec(_Strict):
         spec = self.param(name)
         return all(params.get(k) in allowed for k, allowed in spec.active_when.items())
 
+    def active(self, params: dict[str, Value]) -> dict[str, Value]:
+        """The parameters that mean something with these choices (eta and k only without a preset)."""
+        return {k: v for k, v in params.items() if self.is_active(k, params)}
+
     def fittable(self, params: dict[str, Value], fixed: set[str] = frozenset()) -> list[str]:
         """Parameters the optimiser varies by default: numeric, active, marked `fit`, not fixed."""
         return [

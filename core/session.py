@@ -99,10 +99,12 @@ class _CachedRenderer:
         self.adapter, self.name, self.model, self.scene, self.cache = adapter, name, model, scene, cache
         self.by_resolution: collections.Counter[int] = collections.Counter()
 
+    def _key(self, params: dict[str, Value], lobe: str | None, scene: ProbeScene) -> str:
+        return render_key(self.name, self.model, {k: _round(v) for k, v in params.items()}, scene.cache_key(), lobe)
+
     def __call__(self, params: dict[str, Value], lobe: str | None = None, scene: ProbeScene | None = None):
         sc = scene or self.scene
-        rounded = {k: _round(v) for k, v in params.items()}
-        key = render_key(self.name, self.model, rounded, sc.cache_key(), lobe)
+        key = self._key(params, lobe, sc)
         who = f"adapter {self.name!r} model {self.model!r}"
 
         def render():
@@ -116,7 +118,7 @@ class _CachedRenderer:
         sc = scene or self.scene
         todo, seen = [], set()
         for params, lobe in items:
-            key = render_key(self.name, self.model, {k: _round(v) for k, v in params.items()}, sc.cache_key(), lobe)
+            key = self._key(params, lobe, sc)
             if key not in self.cache and key not in seen:
                 seen.add(key)
                 todo.append((key, params, lobe))
@@ -246,11 +248,10 @@ def result_document(outcome: Outcome) -> dict[str, Any]:
             "file": job.source_file,
             "adapter": job.source.adapter,
             "model": job.source.model,
-            "params": {k: _jsonable(v) for k, v in job.source_params.items()
-                       if job.source_spec.is_active(k, job.source_params)},
+            "params": {k: _jsonable(v) for k, v in job.source_spec.active(job.source_params).items()},
         },
         "target": {"adapter": job.target_adapter, "model": job.target_model},
-        "params": {k: _jsonable(v) for k, v in r.params.items() if job.target_spec.is_active(k, r.params)},
+        "params": {k: _jsonable(v) for k, v in job.target_spec.active(r.params).items()},
         "fitted": r.fitted,
         "fixed": {k: _jsonable(v) for k, v in job.fixed.items()},
         "metrics": {

@@ -288,6 +288,14 @@ def register_bsdfs() -> None:
         def eval_pdf(self, ctx, si, wo, active=True):
             return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
 
+        @staticmethod
+        def _above(wi, wo, active):
+            """Both directions above the surface (these BSDFs reflect only)."""
+            return mi.Bool(active) & (mi.Frame3f.cos_theta(wi) > 0) & (mi.Frame3f.cos_theta(wo) > 0)
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            return self._mix_sample(ctx, si, sample1, sample2, active, self._sample_spec, self.spec_weight)
+
         def _mix_sample(self, ctx, si, sample1, sample2, active, spec_dir, spec_prob):
             """Choose a lobe with probability spec_prob (per lane), sample it, weight = eval / pdf."""
             wi = si.wi
@@ -307,29 +315,18 @@ def register_bsdfs() -> None:
             ok = active & (pdf > 0) & (mi.Frame3f.cos_theta(wo) > 0)
             return bs, dr.select(ok, value / dr.maximum(pdf, 1e-20), 0.0)
 
-    class Ward(_Base):
-        """Mitsuba 0.5's anisotropic Ward BSDF (ward.cpp): variants ward, ward-duer, balanced."""
+    class _Rough(_Base):
+        """A roughness given as ``alpha`` (isotropic, exposed as ``alpha``) or ``alpha_u``/``alpha_v``."""
 
-        default_ks = 0.2
-
-        def __init__(self, props):
-            super().__init__(props)
-            variant = _get(props, "variant", "balanced")
-            if variant not in WARD_VARIANTS:
-                raise ValueError(f"ward: variant must be one of {', '.join(WARD_VARIANTS)}, got {variant!r}")
-            self.variant = variant
+        def _read_alpha(self, props) -> None:
             a = _get(props, "alpha", 0.1)
             self.isotropic = not (_has(props, "alpha_u") or _has(props, "alpha_v"))
-            au = _get(props, "alpha_u", a)
-            av = _get(props, "alpha_v", a)
-            self.alpha_u, self.alpha_v = opaque_float(au), opaque_float(av)
-            self._params_changed()
+            self.alpha_u = opaque_float(_get(props, "alpha_u", a))
+            self.alpha_v = opaque_float(_get(props, "alpha_v", a))
 
-        def _params_changed(self):
-            self._trim()
-            au, av = max(host1(self.alpha_u), ALPHA_MIN), max(host1(self.alpha_v), ALPHA_MIN)
-            self.au, self.av = opaque_float(au), opaque_float(av)
-            self.aniso_ratio = opaque_float(av / au)
+        def _alphas(self) -> tuple[float, float]:
+            """The roughnesses as floats, clamped where Mitsuba 0.5 clamps them."""
+            return max(host1(self.alpha_u), ALPHA_MIN), max(host1(self.alpha_v), ALPHA_MIN)
 
         def traverse(self, callback):
             super().traverse(callback)
@@ -343,6 +340,26 @@ def register_bsdfs() -> None:
             if self.isotropic:
                 self.alpha_v = mi.Float(self.alpha_u)
             self._params_changed()
+
+    class Ward(_Rough):
+        """Mitsuba 0.5's anisotropic Ward BSDF (ward.cpp): variants ward, ward-duer, balanced."""
+
+        default_ks = 0.2
+
+        def __init__(self, props):
+            super().__init__(props)
+            variant = _get(props, "variant", "balanced")
+            if variant not in WARD_VARIANTS:
+                raise ValueError(f"ward: variant must be one of {', '.join(WARD_VARIANTS)}, got {variant!r}")
+            self.variant = variant
+            self._read_alpha(props)
+            self._params_changed()
+
+        def _params_changed(self):
+            self._trim()
+            au, av = self._alphas()
+            self.au, self.av = opaque_float(au), opaque_float(av)
+            self.aniso_ratio = opaque_float(av / au)
 
         def _spec(self, wi, wo):
             h = wi + wo
@@ -359,8 +376,8 @@ def register_bsdfs() -> None:
 
         def eval(self, ctx, si, wo, active=True):
             wi = si.wi
-            ci, co = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
-            active = mi.Bool(active) & (ci > 0) & (co > 0)
+            co = mi.Frame3f.cos_theta(wo)
+            active = self._above(wi, wo, active)
             value = self.ks_eff * self._spec(wi, wo) + self.kd_eff * INV_PI
             return dr.select(active, value * co, 0.0)
 
@@ -373,7 +390,7 @@ def register_bsdfs() -> None:
 
         def pdf(self, ctx, si, wo, active=True):
             wi = si.wi
-            active = mi.Bool(active) & (mi.Frame3f.cos_theta(wi) > 0) & (mi.Frame3f.cos_theta(wo) > 0)
+            active = self._above(wi, wo, active)
             w = self.spec_weight
             p = w * self._spec_pdf(wi, wo) + (1.0 - w) * cos_hemisphere_pdf(wo)
             return dr.select(active, p, 0.0)
@@ -388,9 +405,6 @@ def register_bsdfs() -> None:
             st = dr.sin(theta)
             h = mi.Vector3f(st * c, st * s, dr.cos(theta))
             return 2.0 * dr.dot(wi, h) * h - wi
-
-        def sample(self, ctx, si, sample1, sample2, active=True):
-            return self._mix_sample(ctx, si, sample1, sample2, active, self._sample_spec, self.spec_weight)
 
         def to_string(self):
             return (f"Ward[variant={self.variant}, alpha=({host1(self.alpha_u):g}, {host1(self.alpha_v):g}), "
@@ -422,8 +436,8 @@ def register_bsdfs() -> None:
 
         def eval(self, ctx, si, wo, active=True):
             wi = si.wi
-            ci, co = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
-            active = mi.Bool(active) & (ci > 0) & (co > 0)
+            co = mi.Frame3f.cos_theta(wo)
+            active = self._above(wi, wo, active)
             a = self._cos_alpha(wi, wo)
             spec = dr.select(a > 0, (self.n + 2.0) * INV_TWOPI * dr.power(dr.maximum(a, 1e-30), self.n), 0.0)
             value = self.ks_eff * spec + self.kd_eff * INV_PI
@@ -431,7 +445,7 @@ def register_bsdfs() -> None:
 
         def pdf(self, ctx, si, wo, active=True):
             wi = si.wi
-            active = mi.Bool(active) & (mi.Frame3f.cos_theta(wi) > 0) & (mi.Frame3f.cos_theta(wo) > 0)
+            active = self._above(wi, wo, active)
             a = self._cos_alpha(wi, wo)
             ps = dr.select(a > 0, (self.n + 1.0) * INV_TWOPI * dr.power(dr.maximum(a, 1e-30), self.n), 0.0)
             w = self.spec_weight
@@ -445,14 +459,11 @@ def register_bsdfs() -> None:
             local = mi.Vector3f(sin_a * dr.cos(phi), sin_a * dr.sin(phi), cos_a)
             return mi.Frame3f(r).to_world(local)
 
-        def sample(self, ctx, si, sample1, sample2, active=True):
-            return self._mix_sample(ctx, si, sample1, sample2, active, self._sample_spec, self.spec_weight)
-
         def to_string(self):
             return (f"Phong[exponent={self.n_host:g}, specular_reflectance={self.ks_in}, "
                     f"diffuse_reflectance={self.kd_in}, trim={self.scale:g}]")
 
-    class AshikhminShirley(_Base):
+    class AshikhminShirley(_Rough):
         """Microfacet BSDF with Mitsuba 0.5's `as` distribution (anisotropic Phong, n = 2/alpha^2 - 2).
 
         ``form="conductor"``: Mitsuba 0.5's roughconductor (Fresnel from ``material``, ``eta``/``k``,
@@ -469,11 +480,7 @@ def register_bsdfs() -> None:
             self.form = form
             self.has_diffuse_param = form == "plastic"
             super().__init__(props)
-            a = _get(props, "alpha", 0.1)
-            self.isotropic = not (_has(props, "alpha_u") or _has(props, "alpha_v"))
-            au = _get(props, "alpha_u", a)
-            av = _get(props, "alpha_v", a)
-            self.alpha_u, self.alpha_v = opaque_float(au), opaque_float(av)
+            self._read_alpha(props)
             if form == "conductor":
                 if _has(props, "material"):
                     eta, k = conductor_preset(props.get("material"))
@@ -509,7 +516,7 @@ def register_bsdfs() -> None:
                 self.ks_eff = opaque_color(ks)
                 # Values set through traverse arrive as literals: opaque, or each change recompiles.
                 self.eta_eff, self.k_eff = opaque_color(host(self.eta)), opaque_color(host(self.k))
-            au, av = max(host1(self.alpha_u), ALPHA_MIN), max(host1(self.alpha_v), ALPHA_MIN)
+            au, av = self._alphas()
             self.au_h, self.av_h = au, av
             self.au, self.av = opaque_float(au), opaque_float(av)
             eu, ev = _as_exponent(au), _as_exponent(av)
@@ -529,21 +536,11 @@ def register_bsdfs() -> None:
 
         def traverse(self, callback):
             super().traverse(callback)
-            if self.isotropic:
-                callback.put("alpha", self.alpha_u, mi.ParamFlags.Differentiable)
-            else:
-                callback.put("alpha_u", self.alpha_u, mi.ParamFlags.Differentiable)
-                callback.put("alpha_v", self.alpha_v, mi.ParamFlags.Differentiable)
             if self.form == "conductor":
                 callback.put("eta", self.eta, mi.ParamFlags.Differentiable)
                 callback.put("k", self.k, mi.ParamFlags.Differentiable)
             else:
                 callback.put("int_ior", self.int_ior, mi.ParamFlags.Differentiable)
-
-        def parameters_changed(self, keys):
-            if self.isotropic:
-                self.alpha_v = mi.Float(self.alpha_u)
-            self._params_changed()
 
         # --- the distribution (Mitsuba 0.5 microfacet.h, EPhong with the AS anisotropic extension)
         def _D(self, m):
@@ -614,7 +611,7 @@ def register_bsdfs() -> None:
         def eval(self, ctx, si, wo, active=True):
             wi = si.wi
             ci, co = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
-            active = mi.Bool(active) & (ci > 0) & (co > 0)
+            active = self._above(wi, wo, active)
             value = self._spec_value(wi, wo)
             if self.form == "plastic":
                 t12, t21 = self._transmittance(ci), self._transmittance(co)
@@ -637,7 +634,7 @@ def register_bsdfs() -> None:
 
         def pdf(self, ctx, si, wo, active=True):
             wi = si.wi
-            active = mi.Bool(active) & (mi.Frame3f.cos_theta(wi) > 0) & (mi.Frame3f.cos_theta(wo) > 0)
+            active = self._above(wi, wo, active)
             ps = self._spec_prob(wi)
             p = ps * self._spec_pdf(wi, wo)
             if self.form == "plastic":

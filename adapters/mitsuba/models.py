@@ -16,6 +16,23 @@ ALPHA = ParamSpec(name="alpha", kind="scalar", lower=0.002, upper=1.0, default=0
                   description="Microfacet roughness α (Mitsuba's convention, not Blender's √α).")
 SPEC_REFL = ParamSpec(name="specular_reflectance", kind="rgb", default=(1.0, 1.0, 1.0), fit=False,
                       linear_in=("specular",), description="Multiplier on the specular term (physically 1).")
+ETA = ParamSpec(name="eta", kind="rgb", lower=0.0, upper=8.0, default=(1.0, 1.0, 1.0),
+                active_when={"material": ("none",)}, description="Real part of the complex IOR (RGB).")
+K = ParamSpec(name="k", kind="rgb", lower=0.0, upper=10.0, default=(3.0, 3.0, 3.0),
+              active_when={"material": ("none",)}, description="Imaginary part of the complex IOR (RGB).")
+BASE_COLOUR = ParamSpec(name="diffuse_reflectance", kind="rgb", default=(0.5, 0.5, 0.5), linear_in=("diffuse",),
+                        description="Base colour.")
+INT_IOR = ParamSpec(name="int_ior", kind="scalar", lower=1.01, upper=3.0, default=1.49,
+                    description="Interior index of refraction of the coating (exterior: air).")
+
+
+def _lobes(*specular: str) -> dict[str, LobeSpec]:
+    """A diffuse and a specular lobe, each seen alone by zeroing the other's reflectance."""
+    return {
+        "diffuse": LobeSpec(params=("diffuse_reflectance",), overrides={"specular_reflectance": (0.0, 0.0, 0.0)}),
+        "specular": LobeSpec(params=specular, overrides={"diffuse_reflectance": (0.0, 0.0, 0.0)}),
+    }
+
 
 ROUGHCONDUCTOR = ModelSpec(
     name="roughconductor",
@@ -24,10 +41,8 @@ ROUGHCONDUCTOR = ModelSpec(
         DISTRIBUTION,
         ParamSpec(name="material", kind="choice", default="none", choices=CONDUCTOR_PRESETS,
                   description="Named conductor from Mitsuba's IOR database; 'none' uses eta and k."),
-        ParamSpec(name="eta", kind="rgb", lower=0.0, upper=8.0, default=(1.0, 1.0, 1.0),
-                  active_when={"material": ("none",)}, description="Real part of the complex IOR (RGB)."),
-        ParamSpec(name="k", kind="rgb", lower=0.0, upper=10.0, default=(3.0, 3.0, 3.0),
-                  active_when={"material": ("none",)}, description="Imaginary part of the complex IOR (RGB)."),
+        ETA,
+        K,
         ALPHA,
         SPEC_REFL,
     ),
@@ -42,18 +57,12 @@ ROUGHPLASTIC = ModelSpec(
     description="Diffuse base under a rough dielectric coating (Mitsuba's roughplastic).",
     parameters=(
         DISTRIBUTION,
-        ParamSpec(name="diffuse_reflectance", kind="rgb", default=(0.5, 0.5, 0.5), linear_in=("diffuse",),
-                  description="Base colour."),
+        BASE_COLOUR,
         ALPHA,
-        ParamSpec(name="int_ior", kind="scalar", lower=1.01, upper=3.0, default=1.49,
-                  description="Interior index of refraction of the coating (exterior: air)."),
+        INT_IOR,
         SPEC_REFL,
     ),
-    lobes={
-        "diffuse": LobeSpec(params=("diffuse_reflectance",), overrides={"specular_reflectance": (0.0, 0.0, 0.0)}),
-        "specular": LobeSpec(params=("alpha", "int_ior", "specular_reflectance"),
-                             overrides={"diffuse_reflectance": (0.0, 0.0, 0.0)}),
-    },
+    lobes=_lobes("alpha", "int_ior", "specular_reflectance"),
 )
 
 DIFFUSE = ModelSpec(
@@ -113,11 +122,7 @@ WARD = ModelSpec(
         ParamSpec(name="alpha", kind="scalar", lower=0.002, upper=1.0, default=0.1, scale="log",
                   description="Ward roughness (slope standard deviation)."),
     ),
-    lobes={
-        "diffuse": LobeSpec(params=("diffuse_reflectance",), overrides={"specular_reflectance": (0.0, 0.0, 0.0)}),
-        "specular": LobeSpec(params=("specular_reflectance", "alpha"),
-                             overrides={"diffuse_reflectance": (0.0, 0.0, 0.0)}),
-    },
+    lobes=_lobes("specular_reflectance", "alpha"),
 )
 
 PHONG = ModelSpec(
@@ -130,11 +135,7 @@ PHONG = ModelSpec(
         ParamSpec(name="exponent", kind="scalar", lower=1.0, upper=10000.0, default=30.0, scale="log",
                   description="Phong exponent n (2/α² − 2 for a microfacet α)."),
     ),
-    lobes={
-        "diffuse": LobeSpec(params=("diffuse_reflectance",), overrides={"specular_reflectance": (0.0, 0.0, 0.0)}),
-        "specular": LobeSpec(params=("specular_reflectance", "exponent"),
-                             overrides={"diffuse_reflectance": (0.0, 0.0, 0.0)}),
-    },
+    lobes=_lobes("specular_reflectance", "exponent"),
 )
 
 AS_ALPHA = ParamSpec(name="alpha", kind="scalar", lower=0.01, upper=1.0, default=0.1, scale="log",
@@ -154,10 +155,8 @@ AS_CONDUCTOR = ModelSpec(
                               "eta/k (Gulbrandsen 2014)."),
         ParamSpec(name="edge_tint", kind="rgb", default=(0.5, 0.5, 0.5), active_when={"material": ("reflectivity",)},
                   description="Where eta lies between its extremes for this reflectivity (1: metal-like)."),
-        ParamSpec(name="eta", kind="rgb", lower=0.0, upper=8.0, default=(1.0, 1.0, 1.0),
-                  active_when={"material": ("none",)}, description="Real part of the complex IOR (RGB)."),
-        ParamSpec(name="k", kind="rgb", lower=0.0, upper=10.0, default=(3.0, 3.0, 3.0),
-                  active_when={"material": ("none",)}, description="Imaginary part of the complex IOR (RGB)."),
+        ETA,
+        K,
         AS_ALPHA,
         SPEC_REFL,
     ),
@@ -171,18 +170,12 @@ AS_PLASTIC = ModelSpec(
     name="ashikhmin_shirley_plastic",
     description="Diffuse base under a rough dielectric with Mitsuba 0.5's Ashikhmin-Shirley distribution.",
     parameters=(
-        ParamSpec(name="diffuse_reflectance", kind="rgb", default=(0.5, 0.5, 0.5), linear_in=("diffuse",),
-                  description="Base colour."),
+        BASE_COLOUR,
         AS_ALPHA,
-        ParamSpec(name="int_ior", kind="scalar", lower=1.01, upper=3.0, default=1.49,
-                  description="Interior index of refraction of the coating (exterior: air)."),
+        INT_IOR,
         SPEC_REFL,
     ),
-    lobes={
-        "diffuse": LobeSpec(params=("diffuse_reflectance",), overrides={"specular_reflectance": (0.0, 0.0, 0.0)}),
-        "specular": LobeSpec(params=("alpha", "int_ior", "specular_reflectance"),
-                             overrides={"diffuse_reflectance": (0.0, 0.0, 0.0)}),
-    },
+    lobes=_lobes("alpha", "int_ior", "specular_reflectance"),
 )
 
 MODELS = {m.name: m for m in (ROUGHCONDUCTOR, ROUGHPLASTIC, DIFFUSE, PRINCIPLED, WARD, PHONG, AS_CONDUCTOR,
