@@ -87,7 +87,8 @@ def evaluate(reg, adapters, src: Material, target: str, params: dict):
     return relative_rmse(s_img, t_img), delta_e_itp(s_img, t_img)
 
 
-def run_case(reg, adapters, src, target, *, paper=True, variants=True, cache: Path | None = None, methods=None):
+def run_case(reg, adapters, src, target, *, paper=True, variants=True, cache: Path | None = None, methods=None,
+             tries=()):
     adapter, model, *dist = target.split(":")
     fix = [f"distribution={dist[0]}"] if dist else []
     if model in ("roughconductor",) and src.model == "roughconductor":
@@ -123,6 +124,8 @@ def run_case(reg, adapters, src, target, *, paper=True, variants=True, cache: Pa
     fitted("default", DEFAULT)
     if variants:
         fitted("default, unscaled starts", DEFAULT, linear_starts=False)
+    for label, opts in tries:
+        fitted(label, DEFAULT, **opts)
     return rows
 
 
@@ -135,7 +138,13 @@ def main():
     ap.add_argument("--cache", default=str(ROOT / "out" / "bench-speed"),
                     help="folder keeping the paper and floor results (fixed options), reused by a rerun; '' for none")
     ap.add_argument("--methods", default=None, help="comma-separated methods to run (e.g. paper,floor); default all")
+    ap.add_argument("--try", dest="tries", action="append", default=[], metavar="KEY=VALUE[,KEY=VALUE]",
+                    help="add a row: the default with these engine options changed (repeatable)")
+    ap.add_argument("--only", default=None, metavar="TEXT[,TEXT]",
+                    help="only the cases whose 'name target' contains one of these (e.g. 'principled')")
     args = ap.parse_args()
+    tries = [(f"default, {t}", {k: _value(v) for k, v in (kv.split("=", 1) for kv in t.split(","))})
+             for t in args.tries]
     which = "quick" if args.quick else "subset" if args.subset else "full"
     methods = set(args.methods.split(",")) if args.methods else None
     cache = Path(args.cache) if args.cache else None
@@ -149,9 +158,11 @@ def main():
     t_all = time.perf_counter()
     with open_adapters(reg, ["mitsuba", "cycles"]) as adapters:
         for src, target in cases(which):
+            if args.only and not any(t in f"{src.name} {target}" for t in args.only.split(",")):
+                continue
             paper = which != "full" or target.startswith("mitsuba") or (src.name, target) in PAPER_SAMPLE
             rows = run_case(reg, adapters, src, target, paper=paper, variants=which != "full", cache=cache,
-                            methods=methods)
+                            methods=methods and methods | {label for label, _ in tries}, tries=tries)
             paper_s = rows.get("paper", {}).get("seconds")
             floor_e = rows.get("floor", {}).get("err")
             for label, r in rows.items():
@@ -177,6 +188,15 @@ def main():
         write_text_atomic(Path(args.out), "\n".join(doc))
 
 
+def _value(text: str):
+    for cast in (int, float):
+        try:
+            return cast(text)
+        except ValueError:
+            pass
+    return {"true": True, "false": False, "none": None}.get(text.lower(), text)
+
+
 def summarise(summary) -> list[str]:
     med = ["", "| target | method | cases | median renders | median seconds | median rel. RMSE | "
            "median speed-up vs paper | median error / floor | default within 5% of floor | "
@@ -185,7 +205,7 @@ def summarise(summary) -> list[str]:
     labels = ("paper", "analytic identity", "analytic squared", "floor", "default", "default, unscaled starts")
     for target in [*dict.fromkeys(t for _, t, _ in summary), "all"]:
         group = [rows for _, t, rows in summary if t == target or target == "all"]
-        for label in labels:
+        for label in [*labels, *dict.fromkeys(k for _, _, rows in summary for k in rows if k not in labels)]:
             rs = [g[label] for g in group if label in g]
             if not rs or (target == "all" and label != "default"):
                 continue

@@ -48,6 +48,10 @@ class RemapOptions:
     (ParamSpec.linear_in), predicted from the start's render: no extra render."""
     separable_rgb: bool = True
     """Use one render for the three Jacobian columns of an RGB parameter declared separable."""
+    jacobian_updates: int = 0
+    """After a finite-difference Jacobian, up to this many iterations update it from the step
+    just taken (Broyden's rank-one update: no render) instead of rendering a new one; a fresh
+    one is rendered whenever a step had to be retried. 0: a fresh Jacobian every iteration."""
     fine_steps: int = 1
     """With a coarse level: renders allowed at full resolution beyond one Jacobian, per stage."""
     max_renders_per_stage: int = 80
@@ -139,6 +143,10 @@ class StageResult:
     status: str
     seconds: float
     resolution: int = 0
+    jacobians: int = 0
+    """Finite-difference Jacobians rendered."""
+    updates: int = 0
+    """Jacobians updated from a step instead (no render)."""
 
 
 @dataclass
@@ -185,6 +193,10 @@ class _Stage:
         self.best_u: np.ndarray | None = None
         self.best_err = math.inf
         self._memo: dict[bytes, np.ndarray] = {}
+        self._J: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None  # u, r, J, structure
+        self._updates = 0
+        self._since_jacobian = 0
+        self.n_jacobians = self.n_updates = 0
 
     def residual(self, u: np.ndarray) -> np.ndarray:
         key = np.round(u, 12).tobytes()
@@ -194,6 +206,7 @@ class _Stage:
             raise _BudgetExhausted
         img = self.render(self.space.decode(u), self.lobe)
         self.renders += 1
+        self._since_jacobian += 1
         self.counter[0] += 1
         r = (np.asarray(img, dtype=np.float64).ravel() - self.source) / self.norm
         if not np.isfinite(r).all():
@@ -212,8 +225,23 @@ class _Stage:
         """Forward differences. A separable RGB parameter moves its three components in one
         render: residual rows of channel c belong to component c alone."""
         r0 = self.residual(u)
+        trials, self._since_jacobian = self._since_jacobian, 0
+        if self._J is not None and self._updates < self.options.jacobian_updates and trials <= 1:
+            # The last step was taken at its first try: the model was good; update it along that step.
+            u1, r1, J1, nonzero = self._J
+            dx = u - u1
+            if float(dx @ dx) == 0:
+                return J1
+            J = J1 + np.outer(r0 - r1 - J1 @ dx, dx) / float(dx @ dx)
+            J[~nonzero] = 0.0  # keep the separable structure (Schubert's sparse update)
+            self._J, self._updates = (u.copy(), r0, J, nonzero), self._updates + 1
+            self.n_updates += 1
+            return J
+        self._updates = 0
+        self.n_jacobians += 1
         h = self.options.fd_step
         J = np.zeros((r0.size, u.size))
+        nonzero = np.ones(J.shape, dtype=bool)
         steps = np.where(u + h <= 1.0, h, -h)
         grouped = self.space.separable_groups() if self.options.separable_rgb else []
         self._prefetch(u, steps, grouped)
@@ -224,6 +252,8 @@ class _Stage:
             d = self.residual(v) - r0
             for c, j in enumerate(range(sl.start, sl.stop)):
                 J[c::3, j] = d[c::3] / steps[j]
+                nonzero[:, j] = False
+                nonzero[c::3, j] = True
                 done.add(j)
         for j in range(u.size):
             if j in done:
@@ -231,6 +261,8 @@ class _Stage:
             v = u.copy()
             v[j] += steps[j]
             J[:, j] = (self.residual(v) - r0) / steps[j]
+        self._since_jacobian = 0
+        self._J = (u.copy(), r0, J, nonzero)
         return J
 
     def _prefetch(self, u: np.ndarray, steps: np.ndarray, grouped: list[slice]) -> None:
@@ -338,7 +370,8 @@ class _Stage:
             status = (f"converged (polished from the coarse optimum in {self.renders} renders)" if self.polish
                       else f"stopped at the render budget ({self.options.max_renders_per_stage})")
         self.result = StageResult(self.name, self.lobe, self.space.free, self.renders, start_err, self.best_err,
-                                  status, time.perf_counter() - t0, int(math.isqrt(self.source.size // 3)))
+                                  status, time.perf_counter() - t0, int(math.isqrt(self.source.size // 3)),
+                                  self.n_jacobians, self.n_updates)
         return self.best_u
 
 
@@ -422,6 +455,7 @@ def remap(
     source_lobes = source_lobes or {}
     scheme_used, stages, notes = plan_stages(options.scheme, target, free, source_lobes)
     counter = [0]
+    last: _Stage | None = None
     params = dict(base)
     results: list[StageResult] = []
     fine = polish or Level(render, source, source_lobes)
@@ -451,6 +485,7 @@ def remap(
                        polish=coarse is not None)
         params = space.decode(stage.run(space.encode(params)))
         results.append(stage.result)
+        last = stage
 
     final = np.asarray(render(params, None), dtype=np.float32)
     counter[0] += 1
@@ -461,7 +496,7 @@ def remap(
     # The verdict's Jacobian is taken where the fit was polished: at the coarse level a sharp
     # highlight is sub-pixel, so the coarse problem's minimum is not the result's (α = 0.05).
     reasons, cond, joint_gain = _verdict(target, params, free, fine.source, fine_norm, fine.render, err, options,
-                                         counter, notes)
+                                         counter, notes, seed=last)
     if joint_gain and scheme_used != "one" and len(stages) > 1:
         # The merged lobes are provably not a minimum of the full image (a coupling the split
         # cannot see, e.g. a little Metallic standing in for Specular): refine jointly from here.
@@ -480,7 +515,7 @@ def remap(
                              f"from {err:.2%} to {err_r:.2%}")
                 params, final, err = refined, final_r, err_r
                 reasons, cond, _ = _verdict(target, params, free, fine.source, fine_norm, fine.render, err,
-                                            options, counter, notes)
+                                            options, counter, notes, seed=joint)
     mismatch = len(reasons) == 1 and err > options.threshold and all(r.status.startswith("converged") for r in results)
     if mismatch:
         reasons[0] += (" although the fit converged with no parameter pinned and a well-conditioned Jacobian:"
@@ -493,8 +528,12 @@ def remap(
     )
 
 
-def _verdict(target, params, free, source, norm, render, err, options, counter, notes):
-    """Why the result should not be trusted (empty when it can be), and the Jacobian's condition."""
+def _verdict(target, params, free, source, norm, render, err, options, counter, notes, seed: "_Stage | None" = None):
+    """Why the result should not be trusted (empty when it can be), and the Jacobian's condition.
+
+    ``seed``: the last stage fitted at this level; when it fitted the same parameters to the
+    full image, its renders and Jacobian are reused (updated along its last step when
+    ``options.jacobian_updates`` allows)."""
     reasons: list[str] = []
     if err > options.threshold:
         reasons.append(f"error {err:.1%} above the {options.threshold:.0%} threshold")
@@ -503,7 +542,11 @@ def _verdict(target, params, free, source, norm, render, err, options, counter, 
     # One Jacobian of the full image at the solution: conditioning and active bounds.
     space = ParamSpace(target, params, free)
     stage = _Stage("check", None, space, render, source, norm,
-                   RemapOptions(fd_step=options.fd_step, max_renders_per_stage=10**6), None, counter)
+                   RemapOptions(fd_step=options.fd_step, max_renders_per_stage=10**6,
+                                jacobian_updates=min(options.jacobian_updates, 1)), None, counter)
+    if (seed is not None and seed.lobe is None and seed.space.free == list(free) and seed.render is render
+            and seed._J is not None and seed.norm == norm):
+        stage._memo, stage._J = dict(seed._memo), seed._J
     u = space.encode(params)
     r = stage.residual(u)
     J = stage.jacobian(u)

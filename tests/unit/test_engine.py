@@ -214,3 +214,63 @@ def test_scaled_starts_fit_a_linear_reflectance_in_fewer_renders():
     assert res[True].relative_rmse <= res[False].relative_rmse + 1e-4
     diffuse = {s: next(st for st in res[s].stages if st.lobe == "diffuse") for s in (False, True)}
     assert diffuse[True].renders < diffuse[False].renders
+
+
+def test_jacobian_updates_reach_the_same_fit_in_fewer_renders():
+    _, render, src, lobes = _setup()
+    base = TOY.complete({})
+    res = {n: remap(TOY, render, src, lobes, base=base, free=TOY.fittable(base),
+                    options=RemapOptions(scheme="one", jacobian_updates=n)) for n in (0, 8)}
+    assert res[8].relative_rmse < 1e-3 and abs(res[8].params["alpha"] / 0.15 - 1) < 0.01
+    assert np.allclose(res[8].params["diffuse"], (0.6, 0.3, 0.1), atol=2e-3)
+    assert res[8].renders < res[0].renders
+    assert sum(s.updates for s in res[8].stages) > 0 and sum(s.updates for s in res[0].stages) == 0
+    assert res[8].reliable, res[8].reason
+
+
+def test_an_updated_jacobian_keeps_the_separable_structure():
+    from brdfremap.core.remap import _Stage
+
+    _, render, src, _ = _setup()
+    base = TOY.complete({})
+    space = ParamSpace(TOY, base, TOY.fittable(base))
+    stage = _Stage("t", None, space, render, src, float(np.linalg.norm(src)), RemapOptions(jacobian_updates=3),
+                   None, [0])
+    u0 = space.encode(base)
+    J0 = stage.jacobian(u0)
+    u1 = u0 + 0.05
+    stage.residual(u1)  # a step taken at its first try
+    renders = stage.renders
+    J1 = stage.jacobian(u1)
+    assert stage.renders == renders and stage.n_updates == 1  # updated, not rendered
+    sl = space.slices["diffuse"]
+    for c, j in enumerate(range(sl.start, sl.stop)):
+        other = [k for k in range(3) if k != c]
+        assert all(np.all(J0[k::3, j] == 0) and np.all(J1[k::3, j] == 0) for k in other)
+    assert not np.allclose(J0, J1)
+
+
+def test_a_retried_step_gets_a_fresh_jacobian():
+    from brdfremap.core.remap import _Stage
+
+    _, render, src, _ = _setup()
+    base = TOY.complete({})
+    space = ParamSpace(TOY, base, TOY.fittable(base))
+    stage = _Stage("t", None, space, render, src, float(np.linalg.norm(src)), RemapOptions(jacobian_updates=3),
+                   None, [0])
+    u0 = space.encode(base)
+    stage.jacobian(u0)
+    stage.residual(u0 + 0.2)  # rejected
+    stage.residual(u0 + 0.05)  # accepted on the second try
+    stage.jacobian(u0 + 0.05)
+    assert stage.n_jacobians == 2 and stage.n_updates == 0
+
+
+def test_the_verdict_reuses_the_last_stage_jacobian_when_updates_are_on():
+    _, render, src, lobes = _setup()
+    base = TOY.complete({})
+    out = {n: remap(TOY, render, src, lobes, base=base, free=TOY.fittable(base),
+                    options=RemapOptions(scheme="one", jacobian_updates=n)) for n in (0, 8)}
+    assert out[8].renders == sum(s.renders for s in out[8].stages) + 1  # the final render only
+    assert out[0].renders == sum(s.renders for s in out[0].stages) + 1  # its renders are the stage's
+    assert out[8].jacobian_condition is not None and out[8].reliable
