@@ -3,12 +3,17 @@
     python bench/speed.py [--quick] [--subset] [--out docs/speed.md]
 
 For each case (a source material and a target model):
-  paper     the paper-faithful baseline: one-stage TRF at 512² from the target's defaults
+  paper     the paper-faithful baseline: one-stage TRF at 512² from the target's defaults, a
+            finite-difference Jacobian every iteration
   analytic  today's exporters: fixed formulas (identity α, and α = roughness²); no renders
-  floor     the best achievable: one-stage TRF from 8 starts at 128², 64 spp
-  default   brdf-remap's default (two-stage, coarse-to-fine, 4 starts, 128², 16 spp)
-  default, unscaled starts   the same without scaling each start's linear parameter (a
-            reflectance its lobe is proportional to): the measure of that speed-up
+  floor     the best achievable: one-stage TRF from 8 starts at 128², 64 spp, a finite-difference
+            Jacobian every iteration
+  default   brdf-remap's default (scheme auto: two-stage where the target's lobes divide its
+            parameters, else one-stage; 4 starts; most iterations at 32 px, polished at the
+            scene's 128², 16 spp; Jacobians updated from the steps (Broyden) between rendered ones)
+  default, ...   (--subset, --quick) the default with one speed-up undone, to measure it:
+            unscaled starts (no per-start scale of a reflectance its lobe is proportional to),
+            no Jacobian updates, polish at 64 px, the two-stage scheme
 Every method's parameters are scored on one evaluation render (128², 64 spp, seed 7) against
 the source rendered alike, so the errors are comparable; renders and seconds are the
 method's own. Ratios are printed per case and as medians."""
@@ -72,6 +77,10 @@ def cases(which: str):
 PAPER_SAMPLE = {(c.name, "cycles:principled") for c in CONDUCTORS if c.params["alpha"] in (0.1, 0.4)} | \
     {(c.name, "cycles:glossy:beckmann") for c in CONDUCTORS if c.params["alpha"] == 0.1} | \
     {(PLASTICS[i].name, "cycles:principled") for i in (1, 3, 8)}
+VARIANTS = {"default, unscaled starts": dict(linear_starts=False),
+            "default, no Jacobian updates": dict(jacobian_updates=0),
+            "default, polish at 64 px": dict(polish_resolution=64),
+            "default, two-stage": dict(scheme="two")}
 CACHED = ("paper", "floor")
 """Methods whose results are kept in --cache: their options are fixed here, so a rerun after a
 change to the default reuses them (the default and its variants always run)."""
@@ -112,7 +121,8 @@ def run_case(reg, adapters, src, target, *, paper=True, variants=True, cache: Pa
             write_json_atomic(path, {"key": json.loads(key), "row": rows[label]})
 
     if paper:
-        fitted("paper", PAPER, scheme="one", starts=1, coarse_resolution=None)
+        fitted("paper", PAPER, scheme="one", starts=1, coarse_resolution=None, jacobian_updates=0,
+               linear_starts=False)
     for conv in ("identity", "squared") if methods is None or "analytic" in methods else ():
         p = baselines.convert(src.model, src.params, target, conv)
         if p is not None:
@@ -120,10 +130,12 @@ def run_case(reg, adapters, src, target, *, paper=True, variants=True, cache: Pa
             p = {**{k: v for k, v in spec.complete({}).items()}, **dict(parse_fix(f, spec) for f in fix), **p}
             err, de = evaluate(reg, adapters, src, target, p)
             rows[f"analytic {conv}"] = dict(renders=0, seconds=0.0, err=err, de=de, reliable=None)
-    fitted("floor", FLOOR, scheme="one", starts=8, coarse_resolution=None, max_renders_per_stage=160)
+    fitted("floor", FLOOR, scheme="one", starts=8, coarse_resolution=None, max_renders_per_stage=160,
+           jacobian_updates=0)
     fitted("default", DEFAULT)
     if variants:
-        fitted("default, unscaled starts", DEFAULT, linear_starts=False)
+        for label, opts in VARIANTS.items():
+            fitted(label, DEFAULT, **opts)
     for label, opts in tries:
         fitted(label, DEFAULT, **opts)
     return rows
@@ -202,7 +214,7 @@ def summarise(summary) -> list[str]:
            "median speed-up vs paper | median error / floor | default within 5% of floor | "
            "default ≥3× better than best analytic |",
            "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
-    labels = ("paper", "analytic identity", "analytic squared", "floor", "default", "default, unscaled starts")
+    labels = ("paper", "analytic identity", "analytic squared", "floor", "default", *VARIANTS)
     for target in [*dict.fromkeys(t for _, t, _ in summary), "all"]:
         group = [rows for _, t, rows in summary if t == target or target == "all"]
         for label in [*labels, *dict.fromkeys(k for _, _, rows in summary for k in rows if k not in labels)]:

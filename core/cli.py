@@ -41,7 +41,9 @@ def _remap_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     p.add_argument("--scene", metavar="SCENE.yaml", help="probe scene (default: the built-in probe, "
                    "identical to configs/scenes/default.yaml)")
-    p.add_argument("--scheme", choices=("one", "two", "three"), default="two", help="remap scheme (default: two)")
+    p.add_argument("--scheme", choices=("auto", "one", "two", "three"), default="auto",
+                   help="remap scheme (default auto: two-stage when the target's lobes divide its parameters, "
+                        "else one-stage)")
     p.add_argument("--resolution", type=int, help="override the scene's resolution (pixels)")
     p.add_argument("--spp", type=int, help="override the scene's samples per pixel")
     p.add_argument("--seed", type=int, help="override the scene's sampler seed")

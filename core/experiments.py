@@ -83,7 +83,7 @@ class SceneSpec(_Strict):
 
 
 class Options(_Strict):
-    scheme: Literal["one", "two", "three"] = "two"
+    scheme: Literal["auto", "one", "two", "three"] = "auto"
     starts: int = Field(4, ge=1)
     coarse: int = Field(32, ge=0, description="Coarse-level resolution (0: off).")
     threshold: float = Field(0.05, gt=0)

@@ -57,7 +57,7 @@ def test_two_stage_falls_back_when_source_has_no_lobes():
     _, render, src, _ = _setup()
     base = TOY.complete({})
     res = remap(TOY, render, src, {"diffuse": None, "specular": None}, base=base, free=TOY.fittable(base))
-    assert res.scheme == "two" and res.scheme_used == "one"
+    assert res.scheme == "auto" and res.scheme_used == "one"
     assert "fell back to one-stage" in res.notes[0]
 
 
@@ -138,6 +138,20 @@ def test_plan_stages_folds_a_missing_target_lobe_into_the_full_image():
     used, stages, _ = plan_stages("two", conductor, ["specular", "alpha"], {"diffuse": 1, "specular": 1})
     assert used == "two"
     assert stages == [("specular", None, ["specular", "alpha"], None)]
+
+
+def test_auto_scheme_splits_only_lobes_that_divide_the_parameters():
+    from brdfremap.core.schemas import LobeSpec
+
+    lobes = {"diffuse": 1, "specular": 1}
+    used, stages, _ = plan_stages("auto", TOY, TOY.fittable(TOY.complete({})), lobes)
+    assert used == "two" and [s[0] for s in stages] == ["specular", "diffuse"]
+    # Principled-like: every diffuse parameter also shapes the specular lobe.
+    coupled = TOY.model_copy(update={"lobes": {"diffuse": LobeSpec(params=("diffuse",)),
+                                               "specular": LobeSpec(params=("diffuse", "specular", "alpha"))}})
+    used, stages, _ = plan_stages("auto", coupled, ["diffuse", "specular", "alpha"], lobes)
+    assert used == "one" and stages == [("all", None, ["diffuse", "specular", "alpha"], None)]
+    assert plan_stages("two", coupled, ["diffuse", "specular", "alpha"], lobes)[0] == "two"  # asked for: kept
 
 
 def test_coarse_to_fine_does_most_renders_at_low_resolution():
