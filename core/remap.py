@@ -232,8 +232,8 @@ class _Stage:
             # The last step was taken at its first try: the model was good; update it along that step.
             u1, r1, J1, nonzero = self._J
             dx = u - u1
-            if float(dx @ dx) == 0:
-                return J1
+            if float(np.linalg.norm(dx)) < 0.1 * self.options.fd_step:
+                return J1  # (nearly) the same point: a secant over so short a step is only noise
             J = J1 + np.outer(r0 - r1 - J1 @ dx, dx) / float(dx @ dx)
             J[~nonzero] = 0.0  # keep the separable structure (Schubert's sparse update)
             self._J, self._updates = (u.copy(), r0, J, nonzero), self._updates + 1
@@ -409,6 +409,10 @@ def plan_stages(scheme: Scheme, target: ModelSpec, free: list[str], source_lobes
     notes = []
     if scheme == "auto":
         scheme = "two" if _lobes_split(target, free) else "one"
+        if scheme == "one":
+            why = (f"target model {target.name!r} declares no lobes" if not target.has_lobes else
+                   f"every {target.name!r} parameter of one lobe also shapes the other")
+            notes.append(f"scheme auto: one-stage ({why})")
     if scheme == "one":
         return "one", [("all", None, free, None)], notes
     can_split = target.has_lobes and all(source_lobes.get(lobe) is not None for lobe in ("diffuse", "specular"))
