@@ -2,8 +2,9 @@
 
 The optimiser only ever calls ``render(params, lobe) -> image``; it never evaluates a BRDF.
 Schemes follow Sztrajman et al. (MAM 2017): one-stage (all parameters at once), two-stage
-(specular and diffuse lobes fitted separately, then merged; the default) and three-stage
-(two-stage, then a joint refinement from its result).
+(specular and diffuse lobes fitted separately, then merged) and three-stage (two-stage, then a
+joint refinement from its result). The default, auto, is two-stage where the target's lobes
+divide its parameters and one-stage where they share them.
 """
 
 from __future__ import annotations
