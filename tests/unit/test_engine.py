@@ -242,7 +242,8 @@ def test_jacobian_updates_reach_the_same_fit_in_fewer_renders():
     assert res[8].reliable, res[8].reason
 
 
-def test_an_updated_jacobian_keeps_the_separable_structure():
+def _stage_with_updates():
+    """One full-image stage of the toy with Broyden updates on, and its start point."""
     from brdfremap.core.remap import _Stage
 
     _, render, src, _ = _setup()
@@ -250,7 +251,11 @@ def test_an_updated_jacobian_keeps_the_separable_structure():
     space = ParamSpace(TOY, base, TOY.fittable(base))
     stage = _Stage("t", None, space, render, src, float(np.linalg.norm(src)), RemapOptions(jacobian_updates=3),
                    None, [0])
-    u0 = space.encode(base)
+    return stage, space, space.encode(base)
+
+
+def test_an_updated_jacobian_keeps_the_separable_structure():
+    stage, space, u0 = _stage_with_updates()
     J0 = stage.jacobian(u0)
     u1 = u0 + 0.05
     stage.residual(u1)  # a step taken at its first try
@@ -265,14 +270,7 @@ def test_an_updated_jacobian_keeps_the_separable_structure():
 
 
 def test_a_retried_step_gets_a_fresh_jacobian():
-    from brdfremap.core.remap import _Stage
-
-    _, render, src, _ = _setup()
-    base = TOY.complete({})
-    space = ParamSpace(TOY, base, TOY.fittable(base))
-    stage = _Stage("t", None, space, render, src, float(np.linalg.norm(src)), RemapOptions(jacobian_updates=3),
-                   None, [0])
-    u0 = space.encode(base)
+    stage, _, u0 = _stage_with_updates()
     stage.jacobian(u0)
     stage.residual(u0 + 0.2)  # rejected
     stage.residual(u0 + 0.05)  # accepted on the second try
