@@ -401,7 +401,7 @@ def _lobes_split(target: ModelSpec, free: list[str]) -> bool:
     if not target.has_lobes:
         return False
     lobes = [set(target.lobes[lobe].params) & set(free) for lobe in ("specular", "diffuse")
-             if not target.lobes[lobe].empty]
+             if not target.lobes[lobe].empty and set(target.lobes[lobe].params) & set(free)]
     return len(lobes) < 2 or all(a - b for a, b in (lobes, lobes[::-1]))
 
 

@@ -152,6 +152,11 @@ def test_auto_scheme_splits_only_lobes_that_divide_the_parameters():
     used, stages, _ = plan_stages("auto", coupled, ["diffuse", "specular", "alpha"], lobes)
     assert used == "one" and stages == [("all", None, ["diffuse", "specular", "alpha"], None)]
     assert plan_stages("two", coupled, ["diffuse", "specular", "alpha"], lobes)[0] == "two"  # asked for: kept
+    # A lobe whose parameters are all held (Ward with its diffuse fixed at 0) divides nothing: the
+    # specular lobe is still fitted against the source's specular image, with its scaled starts.
+    used, stages, _ = plan_stages("auto", TOY, ["specular", "alpha"], lobes)
+    assert used == "two" and stages[0] == ("specular", "specular", ["specular", "alpha"], "specular")
+    assert all(not free for _, _, free, _ in stages[1:])  # nothing left to fit: skipped
 
 
 def test_coarse_to_fine_does_most_renders_at_low_resolution():
