@@ -54,7 +54,9 @@ class RemapOptions:
     jacobian_updates: int = 8
     """After a finite-difference Jacobian, up to this many iterations update it from the step
     just taken (Broyden's rank-one update: no render) instead of rendering a new one; a fresh
-    one is rendered whenever a step had to be retried. 0: a fresh Jacobian every iteration."""
+    one is rendered whenever a step had to be retried, and a fit that stops on an updated one
+    is restarted once from its best point with a rendered one. 0: a fresh Jacobian every
+    iteration (the paper's)."""
     fine_steps: int = 1
     """With a coarse level: renders allowed at full resolution beyond one Jacobian, per stage."""
     max_renders_per_stage: int = 80
