@@ -61,7 +61,7 @@ def main():
     print("\n".join(lines))
     print(f"\ntotal {time.perf_counter() - t_all:.0f} s")
     doc = ["# Mitsuba conductors remapped to Blender Cycles", "",
-           "Produced by `python bench/conductors.py` (128², 16 spp, two-stage TRF, default probe scene).",
+           "Produced by `python bench/conductors.py` (128², 16 spp, default options (scheme auto), default probe scene).",
            "β = Mitsuba Beckmann; fitted α = Blender roughness². 'model mismatch' = the fit converged "
            "and the error is what the target model can do.", "", *lines, "", header,
            "|---|---|---:|---:|---:|---:|---:|---:|---|", *[row for _, _, row in rows], ""]

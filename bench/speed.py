@@ -84,6 +84,8 @@ VARIANTS = {"default, unscaled starts": dict(linear_starts=False),
             "default, polish at 64 px": dict(polish_resolution=64),
             "default, two-stage": dict(scheme="two")}
 CACHED = ("paper", "floor")
+CACHE_NOTE = (" Paper and floor rows come from the script's cache when it has them (a run of it with the same"
+              " options, on this machine): the paper's ran alone; the floor's seconds may include other jobs.")
 """Methods whose results are kept in --cache: their options are fixed here, so a rerun after a
 change to the default reuses them (the default and its variants always run)."""
 
@@ -197,7 +199,8 @@ def main():
                 "(PAPER_SAMPLE in the script: at 512² it costs 1-4 minutes a case); its speed-ups are over those.")
         doc = [f"# Remap speed and quality against the baselines ({which} set)", "",
                f"Produced by `python bench/speed.py{' --' + which if which != 'full' else ''}`; see the script's "
-               "docstring for the methods. Errors are on one evaluation render (128², 64 spp)." + note, *med, "",
+               "docstring for the methods. Errors are on one evaluation render (128², 64 spp)." + note + CACHE_NOTE,
+               *med, "",
                *lines, ""]
         write_text_atomic(Path(args.out), "\n".join(doc))
 
