@@ -88,6 +88,9 @@ class Options(_Strict):
     coarse: int = Field(32, ge=0, description="Coarse-level resolution (0: off).")
     threshold: float = Field(0.05, gt=0)
     method: Literal["trf", "dogbox"] = "trf"
+    jacobian_updates: int | None = Field(
+        None, ge=0, description="Broyden updates between rendered Jacobians (0: a rendered one every "
+                                "iteration, as the paper; default: the engine's).")
 
 
 class PlotSpec(_Strict):
@@ -391,7 +394,8 @@ def run_experiment(exp: Experiment, file: str, out: Path, registry: AdapterRegis
     scene = _scene(exp, base_dir)
     o = exp.options
     options = RemapOptions(scheme=o.scheme, starts=o.starts, threshold=o.threshold, method=o.method,
-                           coarse_resolution=o.coarse or None)
+                           coarse_resolution=o.coarse or None,
+                           **({} if o.jacobian_updates is None else {"jacobian_updates": o.jacobian_updates}))
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(out / "experiment.json", exp.model_dump_json(indent=2) + "\n")
     points = points_of(exp)
