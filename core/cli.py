@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import interrupt
 from .errors import ConfigError, RemapError
 
 EXIT_USAGE = 2
@@ -248,6 +249,7 @@ def cmd_experiment(kind: str, args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv
+    interrupt.install()
     try:
         if argv and argv[0] == "adapters":
             return cmd_adapters(_adapters_parser().parse_args(argv[1:]))

@@ -23,6 +23,7 @@ from typing import Any, Callable, Literal
 import numpy as np
 from pydantic import Field, model_validator
 
+from . import interrupt
 from .atomic import write_json_atomic, write_text_atomic
 from .configio import load_yaml_model
 from .errors import ConfigError
@@ -426,12 +427,14 @@ def run_experiment(exp: Experiment, file: str, out: Path, registry: AdapterRegis
                     return _leg_from_doc(doc, params, adapters[adapter_name].derived(side.model, params))
             outcome = run(job, registry, adapters)
             write_outputs(outcome, where, adapters[adapter_name])
+            interrupt.check()  # the point is complete and kept; the sweep stops
             r = outcome.result
             return Leg(dict(r.params), adapters[adapter_name].derived(side.model, r.params), r.relative_rmse,
                        r.perceptual, outcome.noise_floor, r.renders, r.seconds, r.reliable, r.reason, list(r.notes),
                        list(r.fitted), r.verdict)
 
         for i, p in enumerate(points):
+            interrupt.check()  # a Ctrl-C swallowed inside a render still stops the sweep here
             src_mat = Material(adapter=names[0], model=exp.source.model, params=p.params, name=p.id)
             src_spec = registry.get(names[0]).models[exp.source.model]
             src_params = src_spec.complete(p.params, file=file, prefix=f"point {p.id}")

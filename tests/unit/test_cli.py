@@ -102,3 +102,25 @@ def test_argparse_usage_errors_exit_2(capsys):
     with pytest.raises(SystemExit) as e:
         main(["--model", "x"])
     assert e.value.code == 2
+
+
+def test_a_swallowed_ctrl_c_is_still_honoured_at_the_next_check():
+    import signal
+
+    import pytest
+
+    from brdfremap.core import interrupt
+
+    previous = signal.getsignal(signal.SIGINT)
+    try:
+        interrupt.install()
+        interrupt.check()  # nothing pressed: no-op
+        try:
+            signal.raise_signal(signal.SIGINT)
+        except KeyboardInterrupt:
+            pass  # as native code might swallow it
+        with pytest.raises(KeyboardInterrupt):
+            interrupt.check()
+    finally:
+        interrupt._requested.clear()
+        signal.signal(signal.SIGINT, previous)
