@@ -28,7 +28,7 @@ from .atomic import write_json_atomic, write_text_atomic
 from .configio import load_yaml_model
 from .errors import ConfigError
 from .plugins import AdapterRegistry
-from .remap import RemapOptions
+from .remap import ENGINE, RemapOptions
 from .scene import ProbeScene, load_scene
 from .schemas import Material, Value, _Strict
 
@@ -249,7 +249,7 @@ def _leg_from_doc(doc: dict, params: dict[str, Value], derived: dict[str, Value]
 
 def _matches(doc: dict, source: Material, source_params: dict, target: TargetSide, fixed: dict, scene: ProbeScene,
              options: RemapOptions) -> bool:
-    """A finished point is reused only when every input of its remap is unchanged."""
+    """A finished point is reused only when every input of its remap is unchanged, and the engine too."""
     opts = json.loads(json.dumps({k: getattr(options, k) for k in options.__dataclass_fields__}))
     try:
         return (doc["source"]["adapter"] == source.adapter and doc["source"]["model"] == source.model
@@ -257,7 +257,8 @@ def _matches(doc: dict, source: Material, source_params: dict, target: TargetSid
                 and doc["target"] == {"adapter": target.adapter, "model": target.model}
                 and _jsonable(fixed) == doc["fixed"]
                 and json.loads(scene.model_dump_json()) == doc["scene"]
-                and opts == doc["options"])
+                and opts == doc["options"]
+                and doc.get("engine") == ENGINE)  # a result of another engine version is redone
     except (KeyError, TypeError):
         return False
 

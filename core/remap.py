@@ -9,9 +9,11 @@ divide its parameters and one-stage where they share them.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import time
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Callable, Literal
 
 import numpy as np
@@ -22,6 +24,8 @@ from .metrics import delta_e_itp, relative_rmse
 from .schemas import ModelSpec, Value
 
 Scheme = Literal["auto", "one", "two", "three"]
+ENGINE = hashlib.sha256(Path(__file__).read_bytes()).hexdigest()[:12]
+"""This engine's code: a result it made can be reused (a resumed experiment) only by the same engine."""
 RenderFn = Callable[[dict[str, Value], "str | None"], np.ndarray]
 ProgressFn = Callable[[str, int, float], None]
 

@@ -24,7 +24,7 @@ from .imageio import write_exr, write_previews
 from .metrics import error_map, relative_rmse
 from .plugins import AdapterRegistry
 from .protocol import Adapter, check_image
-from .remap import Level, ProgressFn, RemapOptions, RemapResult, remap
+from .remap import ENGINE, Level, ProgressFn, RemapOptions, RemapResult, remap
 from .scene import ProbeScene
 from .schemas import Material, ModelSpec, Value
 
@@ -277,11 +277,13 @@ def result_document(outcome: Outcome) -> dict[str, Any]:
         "notes": r.notes,
         "stages": [
             {"name": s.name, "lobe": s.lobe, "fitted": s.free, "renders": s.renders, "start_error": s.start_error,
-             "error": s.error, "status": s.status, "seconds": s.seconds}
+             "error": s.error, "status": s.status, "seconds": s.seconds, "jacobians": s.jacobians,
+             "jacobian_updates": s.updates}
             for s in r.stages
         ],
         "scene": json.loads(job.scene.model_dump_json()),
         "options": {k: getattr(job.options, k) for k in job.options.__dataclass_fields__},
+        "engine": ENGINE,
         "adapters": outcome.adapters,
         "host": {"python": platform.python_version(), "machine": platform.machine()},
     }

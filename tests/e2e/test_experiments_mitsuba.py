@@ -59,6 +59,15 @@ def test_sweep_writes_csv_plots_and_flags_the_trimmed_point(tmp_path, mitsuba_ad
     assert "(4 remaps resumed" in again and "renders        0 target renders" in again
     assert _rows(out) == rows
 
+    # A point made by another version of the engine is redone, not reused.
+    doc_path = out / "points/00-002/result.json"
+    doc = json.loads(doc_path.read_text())
+    assert doc["engine"] and all("jacobians" in st for st in doc["stages"])
+    doc_path.write_text(json.dumps({**doc, "engine": "older"}))
+    assert main(["sweep", str(path), "--out", str(out), "--quiet"]) == 0
+    third = capsys.readouterr().out
+    assert "(3 remaps resumed" in third and "renders        0 target renders" not in third
+
 
 def test_a_changed_point_is_rerun_and_the_others_reused(tmp_path, mitsuba_adapter, capsys):
     doc = dict(CONDUCTORS, sweep={"param": "material", "values": ["Au", "Cu"]})
