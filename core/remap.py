@@ -24,8 +24,10 @@ from .metrics import delta_e_itp, relative_rmse
 from .schemas import ModelSpec, Value
 
 Scheme = Literal["auto", "one", "two", "three"]
-ENGINE = hashlib.sha256(Path(__file__).read_bytes()).hexdigest()[:12]
-"""This engine's code: a result it made can be reused (a resumed experiment) only by the same engine."""
+ENGINE = hashlib.sha256(b"".join(Path(__file__).with_name(f).read_bytes()
+                                 for f in ("remap.py", "session.py"))).hexdigest()[:12]
+"""This engine's code (the optimiser and the session that sets up its levels): a result it made
+can be reused (a resumed experiment) only by the same engine."""
 RenderFn = Callable[[dict[str, Value], "str | None"], np.ndarray]
 ProgressFn = Callable[[str, int, float], None]
 
@@ -406,8 +408,9 @@ def _lobes_split(target: ModelSpec, free: list[str]) -> bool:
     the full image: one stage from several starts measured as good, in fewer renders."""
     if not target.has_lobes:
         return False
-    lobes = [set(target.lobes[lobe].params) & set(free) for lobe in ("specular", "diffuse")
-             if not target.lobes[lobe].empty and set(target.lobes[lobe].params) & set(free)]
+    shares = [set(target.lobes[lobe].params) & set(free) for lobe in ("specular", "diffuse")
+              if not target.lobes[lobe].empty]
+    lobes = [s for s in shares if s]  # a lobe with every parameter held divides nothing
     return len(lobes) < 2 or all(a - b for a, b in (lobes, lobes[::-1]))
 
 

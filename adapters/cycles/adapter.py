@@ -41,8 +41,9 @@ def _worker_count() -> int:
         if n < 1:
             raise ConfigError("must be at least 1", field="BRDFREMAP_CYCLES_WORKERS")
         return n
-    # Two where there are two cores: measured on 2 cores, a warm remap is 5-17 % faster and a
-    # cold one no slower (the second Blender starts during the first renders).
+    # Two where there are two cores: measured on 2 cores (bench/workers.py), a warm remap to
+    # Principled is 1.03x as fast (1.11x before Jacobians were updated between rendered ones)
+    # and a cold one no slower (the second Blender starts during the first renders).
     return 2 if (os.cpu_count() or 1) >= 2 else 1
 
 
