@@ -13,7 +13,9 @@ For each case (a source material and a target model):
             scene's 128², 16 spp; Jacobians updated from the steps (Broyden) between rendered ones)
   default, ...   (--subset, --quick) the default with one speed-up undone, to measure it:
             unscaled starts (no per-start scale of a reflectance its lobe is proportional to),
-            no Jacobian updates, polish at 64 px, the two-stage scheme
+            no Jacobian updates, polish at 64 px, the two-stage scheme, a polish of every parameter
+            (none held as settled by the coarse fit), a polish at the scene's samples per pixel, and
+            the joint refinement of two-stage results as it was (one round, 0.5-point trigger)
 Every method's parameters are scored on one evaluation render (128², 64 spp, seed 7) against
 the source rendered alike, so the errors are comparable; renders and seconds are the
 method's own. Ratios are printed per case and as medians."""
@@ -82,7 +84,10 @@ PAPER_SAMPLE = {(f"{m} β α={a:g}", t) for m, a, t in (
 VARIANTS = {"default, unscaled starts": dict(linear_starts=False),
             "default, no Jacobian updates": dict(jacobian_updates=0),
             "default, polish at 64 px": dict(polish_resolution=64),
-            "default, two-stage": dict(scheme="two")}
+            "default, two-stage": dict(scheme="two"),
+            "default, polish holds nothing": dict(hold_settled=False),
+            "default, polish at the scene's spp": dict(spp_far=1.0),
+            "default, one joint round, 0.5-point trigger": dict(joint_rounds=1, joint_min_gain=0.005)}
 CACHED = ("paper", "floor")
 CACHE_NOTE = (" Paper and floor rows come from the script's cache when it has them (a run of it with the same"
               " options, on this machine): the paper's ran alone; the floor's seconds may include other jobs.")

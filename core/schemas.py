@@ -39,6 +39,11 @@ class ParamSpec(_Strict):
     active_when: dict[str, tuple[str, ...]] = Field(
         default_factory=dict, description="Only meaningful when these choice parameters take one of these values."
     )
+    inert_when: dict[str, float] = Field(
+        default_factory=dict, description="Has no effect on the image while these numeric parameters take these "
+                                          "values (Principled's Specular IOR Level once Metallic is 1): a fit "
+                                          "that has settled them there need not render this parameter's "
+                                          "Jacobian column.")
     description: str = Field("", description="What it does.")
 
     @model_validator(mode="after")
@@ -116,6 +121,10 @@ class ModelSpec(_Strict):
             for n in (*lobe.params, *lobe.overrides):
                 if n not in names:
                     raise ValueError(f"model {self.name!r}: lobe refers to unknown parameter {n!r}")
+        for p in self.parameters:
+            for n in p.inert_when:
+                if n not in names or n == p.name:
+                    raise ValueError(f"model {self.name!r}: {p.name}.inert_when refers to {n!r}, not another parameter")
         return self
 
     def param(self, name: str) -> ParamSpec:
@@ -149,6 +158,11 @@ class ModelSpec(_Strict):
     def is_active(self, name: str, params: dict[str, Value]) -> bool:
         spec = self.param(name)
         return all(params.get(k) in allowed for k, allowed in spec.active_when.items())
+
+    def is_inert(self, name: str, params: dict[str, Value]) -> bool:
+        """Whether this parameter cannot change the image with these values of the others."""
+        spec = self.param(name)
+        return bool(spec.inert_when) and all(params.get(k) == v for k, v in spec.inert_when.items())
 
     def active(self, params: dict[str, Value]) -> dict[str, Value]:
         """The parameters that mean something with these choices (eta and k only without a preset)."""

@@ -19,8 +19,14 @@ PASS_LOBES_PRINCIPLED = {
 }
 
 
-def _unit(name, default, fit=True, desc="", upper=1.0):
-    return ParamSpec(name=name, kind="scalar", lower=0.0, upper=upper, default=default, fit=fit, description=desc)
+def _unit(name, default, fit=True, desc="", upper=1.0, **kw):
+    return ParamSpec(name=name, kind="scalar", lower=0.0, upper=upper, default=default, fit=fit, description=desc, **kw)
+
+
+# A fully metallic Principled BSDF is the F82-tint conductor of Base Color and Specular Tint:
+# the dielectric's IOR and Specular IOR Level no longer reach the image (checked: identical
+# renders in Blender 5.0; tests/test_cycles.py keeps checking it).
+METAL = {"metallic": 1.0}
 
 
 PRINCIPLED = ModelSpec(
@@ -32,9 +38,10 @@ PRINCIPLED = ModelSpec(
         ParamSpec(name="base_color", kind="rgb", default=(0.8, 0.8, 0.8), description="Base Color."),
         _unit("metallic", 0.0, desc="Metallic."),
         _unit("roughness", 0.5, desc="Roughness (α = roughness²)."),
-        ParamSpec(name="ior", kind="scalar", lower=1.0, upper=3.0, default=1.5, fit=False,
+        ParamSpec(name="ior", kind="scalar", lower=1.0, upper=3.0, default=1.5, fit=False, inert_when=METAL,
                   description="IOR of the dielectric specular (use Specular IOR Level to fit F0)."),
-        _unit("specular_ior_level", 0.5, upper=1.0, desc="Specular IOR Level (0.5 = the IOR as given)."),
+        _unit("specular_ior_level", 0.5, upper=1.0, desc="Specular IOR Level (0.5 = the IOR as given).",
+              inert_when=METAL),
         ParamSpec(name="specular_tint", kind="rgb", default=(1.0, 1.0, 1.0), fit=False, description="Specular Tint."),
         _unit("coat_weight", 0.0, fit=False, desc="Coat Weight."),
         _unit("coat_roughness", 0.03, fit=False, desc="Coat Roughness."),

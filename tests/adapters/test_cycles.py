@@ -37,6 +37,24 @@ def test_principled_lobes_from_passes_sum_to_the_full_image(cycles_adapter, kw):
     assert dif.max() > 0 and spec.max() > 0
 
 
+def test_what_principled_declares_inert_leaves_the_image_unchanged(cycles_adapter):
+    """inert_when lets the engine skip these parameters' Jacobian columns: it must stay true."""
+    spec = cycles_adapter.models["principled"]
+    p = _p(cycles_adapter, "principled", base_color=[0.9, 0.6, 0.3], metallic=1.0, roughness=0.3)
+    ref = cycles_adapter.render("principled", p, SCENE)
+    inert = [q.name for q in spec.parameters if q.inert_when]
+    assert set(inert) == {"ior", "specular_ior_level"}
+    for name, value in (("ior", 2.4), ("specular_ior_level", 0.1)):
+        assert spec.is_inert(name, p)
+        assert np.array_equal(cycles_adapter.render("principled", {**p, name: value}, SCENE), ref), name
+    # Not inert below 1, and Specular Tint (the F82 edge tint) does reach a metal.
+    q = {**p, "metallic": 0.9}
+    assert not spec.is_inert("specular_ior_level", q)
+    assert not np.array_equal(cycles_adapter.render("principled", {**q, "specular_ior_level": 0.1}, SCENE),
+                              cycles_adapter.render("principled", q, SCENE))
+    assert not np.array_equal(cycles_adapter.render("principled", {**p, "specular_tint": (0.5, 0.2, 0.1)}, SCENE), ref)
+
+
 def test_metallic_bsdf_with_mitsuba_eta_k_matches_roughconductor(cycles_adapter, mitsuba_adapter):
     scene = ProbeScene(spp=64)
     mi = mitsuba_adapter.render("roughconductor", mitsuba_adapter.models["roughconductor"].complete(

@@ -291,3 +291,105 @@ def test_the_verdict_reuses_the_last_stage_jacobian_when_updates_are_on():
     assert out[8].renders == sum(s.renders for s in out[8].stages) + 1  # the final render only
     assert out[0].renders == sum(s.renders for s in out[0].stages) + 1  # its renders are the stage's
     assert out[8].jacobian_condition is not None and out[8].reliable
+
+
+def test_the_polish_leaves_out_parameters_the_coarse_fit_settled():
+    """A parameter pinned at its bound by the coarse fit, and one that cannot change the image
+    there (inert_when), are not polished: fewer full-resolution renders, same fit, same verdict."""
+    from brdfremap.core.remap import Level
+    from brdfremap.core.schemas import ModelSpec
+
+    capped = ModelSpec(name="toy", lobes=TOY.lobes, parameters=(
+        TOY.param("diffuse"), TOY.param("specular").model_copy(update={"upper": 0.6}), TOY.param("alpha"),
+        TOY.param("unused").model_copy(update={"fit": True, "inert_when": {"specular": 0.6}})))
+    adapter = ToyAdapter()
+    small = SCENE.with_(resolution=16)
+    render = lambda p, lobe=None: adapter.render("toy", p, SCENE, lobe)  # noqa: E731
+    render_small = lambda p, lobe=None: adapter.render("toy", p, small, lobe)  # noqa: E731
+    base = capped.complete({})
+    free = capped.fittable(base)
+    assert "unused" in free
+    out = {}
+    for hold in (True, False):
+        out[hold] = remap(capped, render, render(TRUTH), base=base, free=free,
+                          options=RemapOptions(scheme="one", hold_settled=hold),
+                          coarse=Level(render_small, render_small(TRUTH), {}))
+    polish = out[True].stages[-1]
+    assert polish.held == {"specular": "pinned", "unused": "inert"}
+    assert polish.free == ["diffuse", "alpha"]
+    assert out[True].params["specular"] == 0.6
+    full = lambda r: sum(s.renders for s in r.stages if s.resolution == SCENE.resolution)  # noqa: E731
+    assert full(out[True]) < full(out[False])
+    assert out[True].relative_rmse <= out[False].relative_rmse * 1.01
+    # The verdict still sees the pinned bound (from the coarse gradient) and the inert parameter.
+    assert "specular pinned at its upper bound" in out[True].reason
+    assert "specular pinned at its upper bound" in out[False].reason
+    assert any(n.startswith("unused did not change the image") for n in out[True].notes)
+
+
+def test_inert_when_must_name_another_parameter():
+    from brdfremap.core.schemas import ModelSpec
+
+    bad = TOY.param("unused").model_copy(update={"inert_when": {"nope": 1.0}})
+    with pytest.raises(ValueError, match="inert_when refers to 'nope'"):
+        ModelSpec(name="t", parameters=(TOY.param("diffuse"), bad))
+    assert not TOY.is_inert("specular", TOY.complete({}))
+
+
+
+def test_a_parameter_nearly_inert_gets_a_zero_column_without_a_render():
+    """inert_when met within 1 % of the range: the column is zero, not rendered, and stays zero
+    through the updates; away from it the column is rendered again."""
+    from brdfremap.core.remap import _Stage
+    from brdfremap.core.schemas import ModelSpec
+
+    spec = ModelSpec(name="toy", lobes=TOY.lobes, parameters=(
+        TOY.param("diffuse"), TOY.param("specular"), TOY.param("alpha").model_copy(update={"inert_when": {"specular": 0.0}})))
+    adapter, render, src, _ = _setup()
+    base = spec.complete({"specular": 0.01})  # 0.5 % of specular's range from 0: alpha barely matters
+    space = ParamSpace(spec, base, spec.fittable(base))
+    stage = _Stage("t", None, space, render, src, float(np.linalg.norm(src)), RemapOptions(jacobian_updates=3), None, [0])
+    u0 = space.encode(base)
+    j = space.slices["alpha"].start
+    J0 = stage.jacobian(u0)
+    assert stage.renders == 1 + 2  # the point, diffuse (one render for RGB), specular: not alpha
+    assert np.all(J0[:, j] == 0)
+    u1 = u0.copy()
+    u1[space.slices["diffuse"]] += 0.05
+    stage.residual(u1)
+    assert np.all(stage.jacobian(u1)[:, j] == 0) and stage.n_updates == 1
+    u2 = u1.copy()
+    u2[space.slices["specular"].start] = 0.4  # far from inert: a rendered Jacobian with alpha's column
+    stage.residual(u2)
+    J2 = stage.jacobian(u2)
+    assert stage.n_jacobians == 2 and np.linalg.norm(J2[:, j]) > 0
+
+
+def test_a_fit_far_above_the_noise_is_polished_with_fewer_samples():
+    """The coarse error 20x the source's noise or more: the polish asks for the level at half the
+    samples (the model limits the fit, not the noise); near the noise it keeps the scene's."""
+    from brdfremap.core.remap import Level
+    from brdfremap.core.schemas import ModelSpec
+
+    capped = ModelSpec(name="toy", lobes=TOY.lobes, parameters=(
+        TOY.param("diffuse"), TOY.param("specular").model_copy(update={"upper": 0.6}), TOY.param("alpha")))
+    adapter = ToyAdapter()
+    small = SCENE.with_(resolution=16)
+    render = lambda p, lobe=None: adapter.render("toy", p, SCENE, lobe)  # noqa: E731
+    render_small = lambda p, lobe=None: adapter.render("toy", p, small, lobe)  # noqa: E731
+    src = render(TRUTH)
+    base = capped.complete({})
+    asked = []
+
+    def resample(factor):
+        asked.append(factor)
+        return Level(lambda p, lobe=None: render(p, lobe), src, {}, spp=8)
+
+    for noise, want in ((1e-4, [0.5]), (1.0, [])):
+        asked.clear()
+        res = remap(capped, render, src, base=base, free=capped.fittable(base),
+                    options=RemapOptions(scheme="one", noise=noise), coarse=Level(render_small, render_small(TRUTH), {}),
+                    resample=resample)
+        assert asked == want
+        assert any("polished at 8 spp" in n for n in res.notes) == bool(want)
+        assert "specular pinned at its upper bound" in res.reason
