@@ -24,10 +24,6 @@ class Adapter(abc.ABC):
     summary: ClassVar[str] = ""
     install_hint: ClassVar[str] = ""
     models: ClassVar[dict[str, ModelSpec]] = {}
-    samples_cost: ClassVar[bool] = True
-    """Whether a render's time grows with its samples per pixel at the probe's sizes (Cycles on a
-    CPU: 8 spp at 128 px take 2.6x less time than 16). False where a render costs its overhead
-    (Mitsuba's JIT variants): the engine then never trades samples for time."""
 
     @classmethod
     def unavailable_reason(cls) -> str | None:

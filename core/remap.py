@@ -63,9 +63,12 @@ class RemapOptions:
     one is rendered whenever a step had to be retried, and a fit that stops on an updated one
     is restarted once from its best point with a rendered one. 0: a fresh Jacobian every
     iteration (the paper's)."""
+    refresh_on_retry: bool = True
+    """A step that had to be retried gets a rendered Jacobian (False: the rejected trials update
+    it too, as secants from the same point)."""
     fine_steps: int = 2
     """With a coarse level: renders allowed at full resolution beyond the coarse optimum's and
-    one Jacobian's, per stage (the polish's steps); two more while each still gains 1 %."""
+    one Jacobian's, per stage (the polish's steps); two more while its latest improvement gained 1 %."""
     hold_settled: bool = True
     """With a coarse level: the polish leaves out the parameters the coarse fit settled, pinned
     at a bound their gradient pushes firmly against (Metallic 1 for a metal) or without effect
@@ -81,13 +84,6 @@ class RemapOptions:
     threshold: float = 0.05
     """Relative RMSE above which a result is not reliable."""
     cond_limit: float = 1e4
-    noise: float = 0.0
-    """Relative RMSE between two renders of the source (the session measures it; 0: unknown)."""
-    spp_far: float = 0.5
-    """With a coarse level and a known noise: the polish renders at this multiple of the scene's
-    samples per pixel when the coarse error is at least 20x the noise: the model, not the noise,
-    limits the fit (Principled from a metal: 67-400x), and half the samples cost Cycles 2.6x less
-    time at 128 px. 1: the scene's own."""
     joint_rounds: int = 2
     """Two-stage: joint refinements of the merged result allowed while the verdict's Gauss-Newton
     step predicts a gain (each one Jacobian and a few steps at the polish level)."""
@@ -164,8 +160,6 @@ class Level:
     render: RenderFn
     source: np.ndarray
     source_lobes: dict[str, np.ndarray | None]
-    spp: int | None = None
-    """Samples per pixel of its renders, when known (for the notes)."""
 
 
 @dataclass
@@ -236,6 +230,7 @@ class _Stage:
         self._since_jacobian = 0
         self._inert: frozenset[int] = frozenset()
         self._extra, self._last_gain = 0, 0.0
+        self._trials: list[tuple[np.ndarray, np.ndarray]] = []  # points rendered since the last Jacobian
         self.n_jacobians = self.n_updates = 0
 
     def residual(self, u: np.ndarray) -> np.ndarray:
@@ -243,8 +238,8 @@ class _Stage:
         if key in self._memo:
             return self._memo[key]
         if self.renders >= self.options.max_renders_per_stage:
-            # A polish whose last render still gained 1 % goes on, up to two renders more: a sharp
-            # highlight's roughness is found only at full resolution, a broad one's is not moved.
+            # A polish whose latest improvement still gained 1 % goes on, up to two renders more: a
+            # sharp highlight's roughness is found only at full resolution, a broad one's is not moved.
             if not (self.polish and self._extra < 2 and self._last_gain >= 0.01):
                 raise _BudgetExhausted
             self._extra += 1
@@ -256,8 +251,10 @@ class _Stage:
         if not np.isfinite(r).all():
             raise OptimisationError(f"stage {self.name}: residuals are not finite at {self.space.decode(u)}")
         self._memo[key] = r
+        self._trials.append((u.copy(), r))
         err = float(np.linalg.norm(r))
-        self._last_gain = (self.best_err - err) / self.best_err if err < self.best_err < math.inf else 0.0
+        if err < self.best_err < math.inf:
+            self._last_gain = (self.best_err - err) / self.best_err  # of the latest improvement
         if err < self.best_err:
             self.best_err, self.best_u = err, u.copy()
         if self.progress:
@@ -271,20 +268,26 @@ class _Stage:
         render: residual rows of channel c belong to component c alone."""
         r0 = self.residual(u)
         trials, self._since_jacobian = self._since_jacobian, 0
+        tried, self._trials = self._trials, []
         inert = self._inert_columns(u)
-        if (self._J is not None and self._updates < self.options.jacobian_updates and trials <= 1
-                and inert >= self._inert):
-            # The last step was taken at its first try: the model was good; update it along that step.
-            u1, r1, J1, nonzero = self._J
-            dx = u - u1
-            if float(np.linalg.norm(dx)) < 0.1 * self.options.fd_step:
-                return J1  # (nearly) the same point: a secant over so short a step is only noise
-            J = J1 + np.outer(r0 - r1 - J1 @ dx, dx) / float(dx @ dx)
+        if (self._J is not None and self._updates < self.options.jacobian_updates
+                and (trials <= 1 or not self.options.refresh_on_retry) and inert >= self._inert):
+            # The last step was taken at its first try (or retries update it too): update the
+            # Jacobian along each secant from the last Jacobian's point, the accepted one last.
+            u1, r1, J, nonzero = self._J
+            if float(np.linalg.norm(u - u1)) < 0.1 * self.options.fd_step:
+                return J  # (nearly) the same point: a secant over so short a step is only noise
             if inert != self._inert:  # a parameter became inert along the step: its column goes to zero
                 nonzero = nonzero.copy()
                 nonzero[:, sorted(inert)] = False
                 self._inert = inert
-            J[~nonzero] = 0.0  # keep the separable structure (Schubert's sparse update)
+            secants = [(v, rv) for v, rv in tried if not np.array_equal(v, u)] + [(u, r0)]
+            for v, rv in secants:
+                dx = v - u1
+                if float(np.linalg.norm(dx)) < 0.1 * self.options.fd_step:
+                    continue
+                J = J + np.outer(rv - r1 - J @ dx, dx) / float(dx @ dx)
+                J[~nonzero] = 0.0  # keep the separable structure (Schubert's sparse update)
             self._J, self._updates = (u.copy(), r0, J, nonzero), self._updates + 1
             self.n_updates += 1
             return J
@@ -316,7 +319,7 @@ class _Stage:
             v = u.copy()
             v[j] += steps[j]
             J[:, j] = (self.residual(v) - r0) / steps[j]
-        self._since_jacobian = 0
+        self._since_jacobian, self._trials = 0, []
         self._J, self._inert = (u.copy(), r0, J, nonzero), inert
         return J
 
@@ -489,21 +492,6 @@ def _settled(stage: _Stage) -> dict[str, Settled]:
     return out
 
 
-def _polish_level(fine: Level, resample, coarse_err: float, options: RemapOptions, name: str, notes: list[str]) -> Level:
-    """The level a stage is polished at: fewer samples where the coarse fit's error is far above
-    the render noise, so they would not move it. (Near the noise the coarse error says little:
-    a 32 px sharp highlight's error is 4x its 128 px one.)"""
-    if resample is None or options.noise <= 0 or options.spp_far == 1.0:
-        return fine
-    ratio = coarse_err / options.noise
-    level = resample(options.spp_far) if ratio >= 20 else None
-    if level is None:
-        return fine
-    notes.append(f"stage {name!r} polished at {level.spp} spp (coarse error {ratio:.0f}x the source's noise: "
-                 "the model, not the noise, limits it)")
-    return level
-
-
 def _van_der_corput(n: int, base: int) -> float:
     q, denom = 0.0, 1.0
     while n:
@@ -578,7 +566,6 @@ def remap(
     progress: ProgressFn | None = None,
     coarse: "Level | None" = None,
     polish: "Level | None" = None,
-    resample: "Callable[[float], Level | None] | None" = None,
 ) -> RemapResult:
     """Fit ``free`` parameters of ``target`` (others as in ``base``) so ``render`` matches ``source``.
 
@@ -587,8 +574,7 @@ def remap(
     ``coarse`` (render, source, source lobes at a lower resolution) moves most iterations
     to cheap renders; each stage then finishes at the ``polish`` level (default: full
     resolution) from the coarse optimum, where the verdict is also taken. The final error
-    is always measured at full resolution. ``resample(factor)`` gives the polish level with its
-    samples per pixel multiplied by ``factor`` (see ``RemapOptions.spp_far``; None: the same)."""
+    is always measured at full resolution."""
     t0 = time.perf_counter()
     source = np.asarray(source, dtype=np.float32)
     if source.ndim != 3 or source.shape[2] != 3:
@@ -608,7 +594,6 @@ def remap(
     last: _Stage | None = None
     held: dict[str, Settled] = {}
     settled: dict[str, Settled] = {}
-    last_level: Level | None = None
     params = dict(base)
     results: list[StageResult] = []
     fine = polish or Level(render, source, source_lobes)
@@ -638,17 +623,15 @@ def remap(
             space = ParamSpace(target, params, polish_free)
             stage_opts = replace(options, starts=1, max_renders_per_stage=(
                 1 + space.jacobian_renders(options.separable_rgb) + options.fine_steps))
-            level = _polish_level(fine, resample, c_stage.result.error, options, name, notes)
         else:
-            stage_opts, level = options, fine
-        src = level.source if src_key is None else level.source_lobes[src_key]
-        level_norm = float(np.linalg.norm(level.source.astype(np.float64)))
-        stage = _Stage(name + fine_name, lobe, space, level.render, src, level_norm, stage_opts, progress, counter,
+            stage_opts = options
+        src = fine.source if src_key is None else fine.source_lobes[src_key]
+        stage = _Stage(name + fine_name, lobe, space, fine.render, src, fine_norm, stage_opts, progress, counter,
                        polish=coarse is not None)
         params = space.decode(stage.run(space.encode(params)))
         stage.result.held = {k: v.why for k, v in settled.items()}
         results.append(stage.result)
-        last, held, last_level = stage, settled, level
+        last, held = stage, settled
 
     final = np.asarray(render(params, None), dtype=np.float32)
     counter[0] += 1
@@ -658,8 +641,6 @@ def remap(
 
     # The verdict's Jacobian is taken where the fit was polished: at the coarse level a sharp
     # highlight is sub-pixel, so the coarse problem's minimum is not the result's (α = 0.05).
-    if last_level is not None and last_level is not fine:
-        fine, fine_norm = last_level, float(np.linalg.norm(last_level.source.astype(np.float64)))
     reasons, cond, joint_gain = _verdict(target, params, free, fine.source, fine_norm, fine.render, err, options,
                                          counter, notes, seed=last, held=held)
     rounds = 0

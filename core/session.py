@@ -180,28 +180,14 @@ def run(job: Job, registry: AdapterRegistry, adapters: dict[str, Adapter], progr
     # Source noise only here (the target's is measured at the end): two renders of one
     # material differ by `source_noise`, so matching closer than a third of it is noise.
     opts = replace(opts, threshold=max(opts.threshold, 2.0 * source_noise),
-                   good_enough=max(opts.good_enough, source_noise / 3), noise=source_noise)
+                   good_enough=max(opts.good_enough, source_noise / 3))
     coarse = polish = None
     if opts.coarse_resolution and 2 * opts.coarse_resolution <= job.scene.resolution:
         coarse = _level(job, src, tgt, job.scene.with_(resolution=opts.coarse_resolution))
         if opts.polish_resolution and 2 * opts.polish_resolution <= job.scene.resolution:
             polish = _level(job, src, tgt, job.scene.with_(resolution=opts.polish_resolution))
-    fine_scene = job.scene.with_(resolution=opts.polish_resolution) if polish is not None else job.scene
-    resampled: dict[int, Level] = {}
-
-    def resample(factor: float) -> Level | None:
-        """The polish level at another sample count (its source rendered alike), made once;
-        None if that is the scene's own."""
-        spp = max(1, round(job.scene.spp * factor))
-        if spp == job.scene.spp:
-            return None
-        if spp not in resampled:
-            resampled[spp] = _level(job, src, tgt, fine_scene.with_(spp=spp))
-        return resampled[spp]
-
-    cheap_samples = not getattr(adapters[job.target_adapter], "samples_cost", True)
     result = remap(job.target_spec, tgt, source_image, lobes, base=job.base, free=job.free, options=opts,
-                   progress=progress, coarse=coarse, polish=polish, resample=None if cheap_samples else resample)
+                   progress=progress, coarse=coarse, polish=polish)
     # The error two renders of the same material show, source and target noise combined:
     # n_x is the difference of two seeds (√2 σ_x), so the floor is sqrt((n_s² + n_t²) / 2).
     target_noise = relative_rmse(result.target_image, tgt(result.params, scene=job.scene.with_(seed=job.scene.seed + 1)))
@@ -233,7 +219,7 @@ def _finite_or_none(x: float | None) -> float | None:
 
 def _level(job: Job, src: _CachedRenderer, tgt: _CachedRenderer, scene: ProbeScene) -> Level:
     full, lobes = _source_images(job, src, scene)
-    return Level(_LevelRenderer(tgt, scene), full, lobes, scene.spp)
+    return Level(_LevelRenderer(tgt, scene), full, lobes)
 
 
 def _source_images(job: Job, src: _CachedRenderer, scene: ProbeScene):

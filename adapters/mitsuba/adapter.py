@@ -166,9 +166,6 @@ class MitsubaAdapter(Adapter):
         except Exception as exc:
             raise RenderError(f"mitsuba cannot use variant {self.choice.variant!r}: {exc}") from exc
         self.mi = mi
-        # JIT variants: a probe render costs its set-up, not its samples (5 ms at 16 spp, 128²),
-        # so fewer samples would buy nothing; scalar_rgb's cost does grow with them.
-        self.samples_cost = not self.choice.variant.startswith(("llvm", "cuda"))
         try:
             register_bsdfs()
         except Exception as exc:

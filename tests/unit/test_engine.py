@@ -364,32 +364,3 @@ def test_a_parameter_nearly_inert_gets_a_zero_column_without_a_render():
     J2 = stage.jacobian(u2)
     assert stage.n_jacobians == 2 and np.linalg.norm(J2[:, j]) > 0
 
-
-def test_a_fit_far_above_the_noise_is_polished_with_fewer_samples():
-    """The coarse error 20x the source's noise or more: the polish asks for the level at half the
-    samples (the model limits the fit, not the noise); near the noise it keeps the scene's."""
-    from brdfremap.core.remap import Level
-    from brdfremap.core.schemas import ModelSpec
-
-    capped = ModelSpec(name="toy", lobes=TOY.lobes, parameters=(
-        TOY.param("diffuse"), TOY.param("specular").model_copy(update={"upper": 0.6}), TOY.param("alpha")))
-    adapter = ToyAdapter()
-    small = SCENE.with_(resolution=16)
-    render = lambda p, lobe=None: adapter.render("toy", p, SCENE, lobe)  # noqa: E731
-    render_small = lambda p, lobe=None: adapter.render("toy", p, small, lobe)  # noqa: E731
-    src = render(TRUTH)
-    base = capped.complete({})
-    asked = []
-
-    def resample(factor):
-        asked.append(factor)
-        return Level(lambda p, lobe=None: render(p, lobe), src, {}, spp=8)
-
-    for noise, want in ((1e-4, [0.5]), (1.0, [])):
-        asked.clear()
-        res = remap(capped, render, src, base=base, free=capped.fittable(base),
-                    options=RemapOptions(scheme="one", noise=noise), coarse=Level(render_small, render_small(TRUTH), {}),
-                    resample=resample)
-        assert asked == want
-        assert any("polished at 8 spp" in n for n in res.notes) == bool(want)
-        assert "specular pinned at its upper bound" in res.reason
