@@ -664,10 +664,10 @@ def remap(
         if not err_r < err:
             break
         if rounds == 1:
-            notes.append(f"two-stage result was not a minimum of the full image; joint refinement took it "
-                         f"from {err:.2%} to {err_r:.2%}")
-        else:
-            notes[-1] = notes[-1].rsplit(" to ", 1)[0] + f" to {err_r:.2%} in {rounds} rounds"
+            joint_note, start_err = len(notes), err
+            notes.append("")
+        notes[joint_note] = (f"two-stage result was not a minimum of the full image; joint refinement took it "
+                             f"from {start_err:.2%} to {err_r:.2%}" + (f" in {rounds} rounds" if rounds > 1 else ""))
         params, final, err = refined, final_r, err_r
         reasons, cond, joint_gain = _verdict(target, params, free, fine.source, fine_norm, fine.render, err,
                                              options, counter, notes, seed=joint)
@@ -746,7 +746,8 @@ def _verdict(target, params, free, source, norm, render, err, options, counter, 
             pins.append((lab, "lower" if at_lo else "upper", float(g[j]), float(col[j]), rr))
     # Held as pinned by the coarse fit: judged on its gradient there (same relative units).
     ph = ParamSpace(target, params, list(held))
-    pins += [(n, "lower" if ph.encode(params)[ph.slices[n].start] <= 0.5 else "upper", h.g, h.col, h.rr)
+    uh = ph.encode(params)
+    pins += [(n, "lower" if uh[ph.slices[n].start] <= 0.5 else "upper", h.g, h.col, h.rr)
              for n, h in held.items() if h.why == "pinned"]
     for lab, side, gj, cj, rrj in pins:
         better = math.sqrt(max(rrj - gj ** 2 / cj ** 2, 0.0))
