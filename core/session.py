@@ -223,17 +223,18 @@ def _level(job: Job, src: _CachedRenderer, tgt: _CachedRenderer, scene: ProbeSce
 
 
 def _source_images(job: Job, src: _CachedRenderer, scene: ProbeScene):
-    """The source's full image and its lobes (None: cannot isolate; zeros: has no such lobe)."""
-    full = src(job.source_params, scene=scene)
+    """The source's full image and its lobes (None: cannot isolate; zeros: has no such lobe).
+    The lobes come first: an adapter whose render yields every lobe at once (Cycles' passes)
+    then serves the full image from it, where a full image alone is rendered without them."""
     lobes: dict[str, np.ndarray | None] = {}
     for lobe in ("diffuse", "specular"):
         spec = job.source_spec.lobes.get(lobe)
-        if spec is None:
-            lobes[lobe] = None
-        elif spec.empty:
+        lobes[lobe] = None if spec is None or spec.empty else src(job.source_params, lobe, scene=scene)
+    full = src(job.source_params, scene=scene)
+    for lobe in ("diffuse", "specular"):
+        spec = job.source_spec.lobes.get(lobe)
+        if spec is not None and spec.empty:
             lobes[lobe] = np.zeros_like(full)
-        else:
-            lobes[lobe] = src(job.source_params, lobe, scene=scene)
     return full, lobes
 
 

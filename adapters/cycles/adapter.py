@@ -53,7 +53,7 @@ def _scratch_dir() -> str:
     return tempfile.mkdtemp(prefix="brdfremap-cycles-", dir=base)
 
 
-def read_passes(path: str) -> dict[str, np.ndarray]:
+def read_passes(path: str, expected: tuple[str, ...] = PASSES) -> dict[str, np.ndarray]:
     """Read the multi-part EXR Blender 5 writes: one part per pass, channels 'Layer.Pass.C'."""
     import OpenImageIO as oiio
 
@@ -79,7 +79,7 @@ def read_passes(path: str) -> dict[str, np.ndarray]:
     for pname, chans in out.items():
         if all(c in chans for c in "RGB"):
             images[pname] = np.stack([chans["R"], chans["G"], chans["B"]], axis=-1).astype(np.float32)
-    missing = [p for p in PASSES if p not in images]
+    missing = [p for p in expected if p not in images]
     if missing:
         raise RenderError(f"cycles: render passes missing from {path}: {missing} (found {sorted(images)})")
     return images
@@ -139,11 +139,21 @@ class CyclesAdapter(Adapter):
                "scene": scene.document()}
         return json.dumps(req, sort_keys=True), req
 
-    def _render_passes(self, worker: JsonLinesWorker, req: dict[str, Any], n: int) -> dict[str, np.ndarray]:
+    def _cached(self, key: str, lobe: str | None) -> dict[str, np.ndarray] | None:
+        """A kept render that can serve this request: any for the full image, one with the lobe
+        passes for a lobe."""
+        passes = self._passes.get(key)
+        if passes is None or (lobe is not None and not all(p in passes for p in PASSES)):
+            return None
+        return passes
+
+    def _render_passes(self, worker: JsonLinesWorker, req: dict[str, Any], n: int,
+                       lobes: bool) -> dict[str, np.ndarray]:
+        """One render; its lobe passes only when ``lobes`` (they cost about 13 % of a render)."""
         out = os.path.join(self.scratch, f"r{n}.exr")
         try:
-            worker.request({"op": "render", "out": out, **req})
-            return read_passes(out)
+            worker.request({"op": "render", "out": out, "passes": lobes, **req})
+            return read_passes(out, PASSES if lobes else PASSES[:1])
         finally:
             try:
                 os.unlink(out)
@@ -159,11 +169,12 @@ class CyclesAdapter(Adapter):
         if self.n_workers > 1 and not self._extra:
             self._start_extras()
         key, req = self._request(model, params, scene)
-        passes = self._passes.get(key)
+        passes = self._cached(key, lobe)
         if passes is None:
-            # One render yields every lobe (passes): a lobe request after the full image is free.
+            # A lobe's render yields every lobe and the full image (passes): asked for after it,
+            # they are free. A full image alone is rendered without the passes.
             self.renders += 1
-            passes = self._render_passes(self.worker, req, self.renders)
+            passes = self._render_passes(self.worker, req, self.renders, lobes=lobe is not None)
             self._keep(key, passes)
         else:
             self._passes.move_to_end(key)
@@ -175,10 +186,13 @@ class CyclesAdapter(Adapter):
         Blender spends much of a small render in single-threaded scene sync, so a second
         worker overlaps that; ``BRDFREMAP_CYCLES_WORKERS`` sets the count (default 2 with 2+ cores)."""
         todo: dict[str, dict[str, Any]] = {}
-        for model, params, scene, _lobe in requests:
+        lobes: set[str] = set()
+        for model, params, scene, lobe in requests:
             key, req = self._request(model, params, scene)
-            if key not in self._passes:
+            if self._cached(key, lobe) is None:
                 todo.setdefault(key, req)
+                if lobe is not None:
+                    lobes.add(key)
         workers = self._workers(len(todo))
         if len(todo) >= 2 and len(workers) >= 2:
             keys = list(todo)
@@ -191,7 +205,8 @@ class CyclesAdapter(Adapter):
             def feed(worker, share, offset):
                 try:
                     for i, k in enumerate(share):
-                        results[k] = self._render_passes(worker, todo[k], base + offset + i * len(workers) + 1)
+                        results[k] = self._render_passes(worker, todo[k], base + offset + i * len(workers) + 1,
+                                                         lobes=k in lobes)
                 except BaseException as exc:  # re-raised below, in the caller's thread
                     errors.append(exc)
 

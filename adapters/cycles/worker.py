@@ -15,6 +15,8 @@ import sys
 import time
 import traceback
 
+LOBE_PASSES = ("use_pass_diffuse_direct", "use_pass_diffuse_color", "use_pass_glossy_direct", "use_pass_glossy_color")
+
 
 class BlenderState:
     def __init__(self):
@@ -22,6 +24,7 @@ class BlenderState:
 
         self.bpy = bpy
         self.scene_key = None
+        self.passes = None
         self.materials = {}
         self.probe = None
 
@@ -78,10 +81,9 @@ class BlenderState:
         self._camera(scene, sc_json["camera"])
         self._light(scene, sc_json["light"])
         self._sphere(scene, sc_json["sphere"])
-        vl = scene.view_layers[0]
-        for attr in ("use_pass_diffuse_direct", "use_pass_diffuse_color", "use_pass_glossy_direct",
-                     "use_pass_glossy_color"):
-            setattr(vl, attr, True)
+        # One point light: nothing for a light tree to choose between (measured 3-5 % faster off).
+        cy.use_light_tree = False
+        self.passes = None  # the lobe passes are switched on per request (see render)
         ims = r.image_settings
         ims.media_type = "MULTI_LAYER_IMAGE"  # Blender 5.0: before the file format
         ims.file_format = "OPEN_EXR_MULTILAYER"
@@ -180,6 +182,14 @@ class BlenderState:
             self.set_material.inputs["Material"].default_value = mat
         scene = self.bpy.context.scene
         scene.render.filepath = req["out"]
+        # The lobe passes only when a lobe is asked for: accumulating them costs about 13 % of a
+        # render (measured at 128² and 32², 16 spp).
+        passes = bool(req.get("passes", True))
+        if passes != self.passes:
+            vl = scene.view_layers[0]
+            for attr in LOBE_PASSES:
+                setattr(vl, attr, passes)
+            self.passes = passes
         self.bpy.ops.render.render(write_still=True)
         if not os.path.exists(req["out"]):
             raise RuntimeError(f"Blender did not write {req['out']}")

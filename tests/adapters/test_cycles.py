@@ -37,6 +37,25 @@ def test_principled_lobes_from_passes_sum_to_the_full_image(cycles_adapter, kw):
     assert dif.max() > 0 and spec.max() > 0
 
 
+def test_a_full_image_is_rendered_without_the_lobe_passes_and_a_lobes_render_serves_it(cycles_adapter):
+    """The passes cost about 13 % of a render: a full image alone is rendered without them (the
+    same pixels), a lobe asked for later renders again with them, and one rendered with them
+    serves the full image and the other lobe free."""
+    p = _p(cycles_adapter, "principled", base_color=[0.6, 0.3, 0.2], roughness=0.37, metallic=0.3)
+    n = cycles_adapter.renders
+    full = cycles_adapter.render("principled", p, SCENE)
+    spec = cycles_adapter.render("principled", p, SCENE, "specular")
+    assert cycles_adapter.renders == n + 2
+    assert np.array_equal(cycles_adapter.render("principled", p, SCENE), full)  # the lobes' render kept it
+    dif = cycles_adapter.render("principled", p, SCENE, "diffuse")
+    assert cycles_adapter.renders == n + 2
+    assert relative_rmse(full, dif + spec) < 1e-6
+    q = dict(p, roughness=0.38)
+    cycles_adapter.render("principled", q, SCENE, "diffuse")
+    cycles_adapter.render("principled", q, SCENE)
+    assert cycles_adapter.renders == n + 3
+
+
 def test_what_principled_declares_inert_leaves_the_image_unchanged(cycles_adapter):
     """inert_when lets the engine skip these parameters' Jacobian columns: it must stay true."""
     spec = cycles_adapter.models["principled"]
