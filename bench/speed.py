@@ -89,7 +89,8 @@ VARIANTS = {"default, unscaled starts": dict(linear_starts=False),
             "default, one joint round, 0.5-point trigger": dict(joint_rounds=1, joint_min_gain=0.005)}
 CACHED = ("paper", "floor")
 CACHE_NOTE = (" Paper and floor rows come from the script's cache when it has them (a run of it with the same"
-              " options, on this machine): the paper's ran alone; the floor's seconds may include other jobs.")
+              " options, on this machine): the paper's ran alone; the floor's seconds may include other jobs, and a"
+              " cached row keeps the seconds of the code that made it (delete its file in the cache to redo it).")
 """Methods whose results are kept in --cache: their options are fixed here, so a rerun after a
 change to the default reuses them (the default and its variants always run)."""
 
