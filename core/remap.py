@@ -722,7 +722,9 @@ def _verdict(target, params, free, source, norm, render, err, options, counter, 
         reasons.append("no fitted parameter changes the image (ill-conditioned Jacobian)")
     elif dead:
         # Harmless for the appearance (e.g. a specular level once metallic = 1), but the value is arbitrary.
-        notes.append(f"{', '.join(dead)} did not change the image at the solution: left where the fit put it")
+        note = f"{', '.join(dead)} did not change the image at the solution: left where the fit put it"
+        if note not in notes:  # the verdict runs again after each joint round
+            notes.append(note)
     if live.sum() > 1:
         s = np.linalg.svd(J[:, live] / col[live], compute_uv=False)
         cond = float(s[0] / s[-1]) if s[-1] > 0 else math.inf

@@ -364,3 +364,14 @@ def test_a_parameter_nearly_inert_gets_a_zero_column_without_a_render():
     J2 = stage.jacobian(u2)
     assert stage.n_jacobians == 2 and np.linalg.norm(J2[:, j]) > 0
 
+
+
+def test_the_verdict_run_again_after_a_joint_round_does_not_repeat_its_notes():
+    from brdfremap.core.remap import _verdict
+
+    _, render, src, _ = _setup()
+    params, notes = dict(TRUTH), []
+    norm = float(np.sqrt(np.mean(np.asarray(src, dtype=np.float64) ** 2)))
+    for _ in range(2):
+        _verdict(TOY, params, ["alpha", "unused"], src, norm, render, 0.0, RemapOptions(), [0], notes)
+    assert [n for n in notes if "unused did not change the image" in n] == [notes[0]] and len(notes) == 1
