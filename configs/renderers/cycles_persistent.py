@@ -32,7 +32,9 @@ for line in sys.stdin:
         req = json.loads(line)
         if req.get("op") == "quit":
             break
-        state.render({"scene": req["scene"], "model": req["model"], "params": req["params"], "out": req["output"]})
+        # The full image only (this protocol isolates no lobe): no lobe passes to accumulate.
+        state.render({"scene": req["scene"], "model": req["model"], "params": req["params"], "out": req["output"],
+                      "passes": False})
         send({"id": req.get("id"), "ok": True})
     except Exception as exc:  # report, keep serving
         traceback.print_exc()
