@@ -643,8 +643,8 @@ def remap(
     # highlight is sub-pixel, so the coarse problem's minimum is not the result's (α = 0.05).
     reasons, cond, joint_gain = _verdict(target, params, free, fine.source, fine_norm, fine.render, err, options,
                                          counter, notes, seed=last, held=held)
-    rounds = 0
-    while joint_gain and scheme_used != "one" and len(stages) > 1 and rounds < options.joint_rounds:
+    rounds, first = 0, (err, joint_gain)
+    while joint_gain is not None and scheme_used != "one" and len(stages) > 1 and rounds < options.joint_rounds:
         # The merged lobes are provably not a minimum of the full image (a coupling the split
         # cannot see, e.g. a little Metallic standing in for Specular): refine jointly from here,
         # again while a round ends with a joint step still predicting a gain.
@@ -671,6 +671,14 @@ def remap(
         params, final, err = refined, final_r, err_r
         reasons, cond, joint_gain = _verdict(target, params, free, fine.source, fine_norm, fine.render, err,
                                              options, counter, notes, seed=joint)
+    if rounds and joint_gain is not None and first[0] - err < 0.25 * (first[0] - first[1]):
+        # The joint rounds realised under a quarter of the gain first predicted: the step's linear
+        # model does not hold here (AlSb α 0.05 to Ward: 0.2 % predicted, 0.52 → 0.51 % in two
+        # rounds), so the prediction is no reason to distrust the result; it stays a note.
+        reasons = [x for x in reasons if not x.startswith("not at a minimum of the full image")]
+        notes.append(f"a joint step still predicts {joint_gain:.1%}, but {rounds} joint round{'s' * (rounds > 1)} "
+                     f"took the error only from {first[0]:.2%} to {err:.2%} (predicted {first[1]:.2%}): the "
+                     f"prediction does not hold here (render noise or curvature)")
     mismatch = len(reasons) == 1 and err > options.threshold and all(r.status.startswith("converged") for r in results)
     if mismatch:
         reasons[0] += (" although the fit converged with no parameter pinned and a well-conditioned Jacobian:"
@@ -695,7 +703,7 @@ def _verdict(target, params, free, source, norm, render, err, options, counter, 
     if err > options.threshold:
         reasons.append(f"error {err:.1%} above the {options.threshold:.0%} threshold")
     if not free:
-        return reasons, None, False
+        return reasons, None, None
     held = dict(held or {})
     reuse = (seed is not None and seed.lobe is None and seed.render is render and seed._J is not None
              and seed.norm == norm and set(seed.space.free) | set(held) == set(free)
@@ -736,8 +744,8 @@ def _verdict(target, params, free, source, norm, render, err, options, counter, 
     # here predicts what a joint fit could still gain (the lobe split can miss a coupling).
     step = lsq_linear(J, -r, bounds=(-u, 1.0 - u))
     predicted = max(float(np.linalg.norm(J @ step.x + r)), options.good_enough)
-    joint_gain = math.sqrt(rr) - predicted > max(0.15 * math.sqrt(rr), options.joint_min_gain)
-    if joint_gain:
+    joint_gain = predicted if math.sqrt(rr) - predicted > max(0.15 * math.sqrt(rr), options.joint_min_gain) else None
+    if joint_gain is not None:
         reasons.append(f"not at a minimum of the full image: a joint step predicts {predicted:.1%} "
                        f"(try --scheme three)")
     pins = []
