@@ -643,7 +643,7 @@ def remap(
     # highlight is sub-pixel, so the coarse problem's minimum is not the result's (α = 0.05).
     reasons, cond, joint_gain = _verdict(target, params, free, fine.source, fine_norm, fine.render, err, options,
                                          counter, notes, seed=last, held=held)
-    rounds, first = 0, (err, joint_gain)
+    rounds, err0, predicted0 = 0, err, joint_gain
     while joint_gain is not None and scheme_used != "one" and len(stages) > 1 and rounds < options.joint_rounds:
         # The merged lobes are provably not a minimum of the full image (a coupling the split
         # cannot see, e.g. a little Metallic standing in for Specular): refine jointly from here,
@@ -671,13 +671,13 @@ def remap(
         params, final, err = refined, final_r, err_r
         reasons, cond, joint_gain = _verdict(target, params, free, fine.source, fine_norm, fine.render, err,
                                              options, counter, notes, seed=joint)
-    if rounds and joint_gain is not None and first[0] - err < 0.25 * (first[0] - first[1]):
+    if rounds and joint_gain is not None and err0 - err < 0.25 * (err0 - predicted0):
         # The joint rounds realised under a quarter of the gain first predicted: the step's linear
         # model does not hold here (AlSb α 0.05 to Ward: 0.2 % predicted, 0.52 → 0.51 % in two
         # rounds), so the prediction is no reason to distrust the result; it stays a note.
-        reasons = [x for x in reasons if not x.startswith("not at a minimum of the full image")]
+        reasons = [x for x in reasons if not x.startswith(_NOT_A_MINIMUM)]
         notes.append(f"a joint step still predicts {joint_gain:.1%}, but {rounds} joint round{'s' * (rounds > 1)} "
-                     f"took the error only from {first[0]:.2%} to {err:.2%} (predicted {first[1]:.2%}): the "
+                     f"took the error only from {err0:.2%} to {err:.2%} (predicted {predicted0:.2%}): the "
                      f"prediction does not hold here (render noise or curvature)")
     mismatch = len(reasons) == 1 and err > options.threshold and all(r.status.startswith("converged") for r in results)
     if mismatch:
@@ -689,6 +689,9 @@ def remap(
         seconds=time.perf_counter() - t0, reliable=not reasons, reason="; ".join(reasons) or "ok",
         verdict="ok" if not reasons else ("mismatch" if mismatch else "unreliable"), stages=results, notes=notes, jacobian_condition=cond, target_image=final,
     )
+
+
+_NOT_A_MINIMUM = "not at a minimum of the full image"
 
 
 def _verdict(target, params, free, source, norm, render, err, options, counter, notes, seed: "_Stage | None" = None,
@@ -746,8 +749,7 @@ def _verdict(target, params, free, source, norm, render, err, options, counter, 
     predicted = max(float(np.linalg.norm(J @ step.x + r)), options.good_enough)
     joint_gain = predicted if math.sqrt(rr) - predicted > max(0.15 * math.sqrt(rr), options.joint_min_gain) else None
     if joint_gain is not None:
-        reasons.append(f"not at a minimum of the full image: a joint step predicts {predicted:.1%} "
-                       f"(try --scheme three)")
+        reasons.append(f"{_NOT_A_MINIMUM}: a joint step predicts {predicted:.1%} (try --scheme three)")
     pins = []
     for j, lab in enumerate(labels):
         at_lo, at_hi = u[j] <= 1e-3, u[j] >= 1 - 1e-3

@@ -226,15 +226,13 @@ def _source_images(job: Job, src: _CachedRenderer, scene: ProbeScene):
     """The source's full image and its lobes (None: cannot isolate; zeros: has no such lobe).
     The lobes come first: an adapter whose render yields every lobe at once (Cycles' passes)
     then serves the full image from it, where a full image alone is rendered without them."""
-    lobes: dict[str, np.ndarray | None] = {}
-    for lobe in ("diffuse", "specular"):
-        spec = job.source_spec.lobes.get(lobe)
-        lobes[lobe] = None if spec is None or spec.empty else src(job.source_params, lobe, scene=scene)
+    specs = {lobe: job.source_spec.lobes.get(lobe) for lobe in ("diffuse", "specular")}
+    rendered = {lobe: src(job.source_params, lobe, scene=scene)
+                for lobe, spec in specs.items() if spec is not None and not spec.empty}
     full = src(job.source_params, scene=scene)
-    for lobe in ("diffuse", "specular"):
-        spec = job.source_spec.lobes.get(lobe)
-        if spec is not None and spec.empty:
-            lobes[lobe] = np.zeros_like(full)
+    lobes: dict[str, np.ndarray | None] = {
+        lobe: None if spec is None else np.zeros_like(full) if spec.empty else rendered[lobe]
+        for lobe, spec in specs.items()}
     return full, lobes
 
 

@@ -81,7 +81,7 @@ class BlenderState:
         self._camera(scene, sc_json["camera"])
         self._light(scene, sc_json["light"])
         self._sphere(scene, sc_json["sphere"])
-        # One point light: nothing for a light tree to choose between (measured 3-5 % faster off).
+        # One point light: nothing for a light tree to choose between (bench/cycles_render.py).
         cy.use_light_tree = False
         self.passes = None  # the lobe passes are switched on per request (see render)
         ims = r.image_settings

@@ -365,7 +365,6 @@ def test_a_parameter_nearly_inert_gets_a_zero_column_without_a_render():
     assert stage.n_jacobians == 2 and np.linalg.norm(J2[:, j]) > 0
 
 
-
 def test_the_verdict_run_again_after_a_joint_round_does_not_repeat_its_notes():
     from brdfremap.core.remap import _verdict
 
