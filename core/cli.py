@@ -55,6 +55,9 @@ def _remap_parser() -> argparse.ArgumentParser:
     p.add_argument("--coarse", type=int, default=32, metavar="N",
                    help="resolution of the coarse level where most iterations run (default 32; 0: off)")
     p.add_argument("--starts", type=int, default=4, help="initial points tried per stage (default 4)")
+    p.add_argument("--start", choices=("informed", "defaults"), default="informed",
+                   help="first start: the exporters' conversion of the source where both adapters read one "
+                        "(default), or the target model's defaults")
     p.add_argument("--threshold", type=float, default=0.05,
                    help="relative RMSE above which a result is flagged unreliable (default 0.05)")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
@@ -148,7 +151,7 @@ def cmd_remap(args: argparse.Namespace) -> int:
     if args.coarse < 0 or 0 < args.coarse < 8:
         raise ConfigError("must be 0 (off) or at least 8", field="--coarse")
     options = RemapOptions(scheme=args.scheme, starts=args.starts, threshold=args.threshold, method=args.method,
-                           coarse_resolution=args.coarse or None)
+                           coarse_resolution=args.coarse or None, informed_start=args.start == "informed")
     job = prepare(registry, source, str(args.source), args.adapter, args.model, scene, fixed, options)
     out = Path(args.out)
     if out.exists() and not out.is_dir():
@@ -166,6 +169,8 @@ def cmd_remap(args: argparse.Namespace) -> int:
         ("params", _fmt_params(spec.active(r.params))),
         ("relative RMSE", f"{r.relative_rmse:.2%}   (noise floor {outcome.noise_floor:.2%})"),
         ("perceptual", f"{r.perceptual:.2f} mean ΔE_ITP"),
+        ("start", "the exporters' conversion: " + _fmt_params(outcome.start) if outcome.start
+                  else "the target's defaults"),
         ("renders", f"{r.renders} target ({', '.join(f'{v} at {k}px' for k, v in outcome.renders_by_resolution.items())})"
                     f" + {outcome.source_renders} source"),
         ("seconds", f"{r.seconds:.2f}"),

@@ -92,6 +92,9 @@ class Options(_Strict):
     jacobian_updates: int | None = Field(
         None, ge=0, description="Broyden updates between rendered Jacobians (0: a rendered one every "
                                 "iteration, as the paper; default: the engine's).")
+    start: Literal["informed", "defaults"] = Field(
+        "informed", description="First start: the exporters' conversion of the source (as `remap`), or the target "
+                                "model's defaults (as the paper's fits).")
 
 
 class PlotSpec(_Strict):
@@ -396,7 +399,7 @@ def run_experiment(exp: Experiment, file: str, out: Path, registry: AdapterRegis
     scene = _scene(exp, base_dir)
     o = exp.options
     options = RemapOptions(scheme=o.scheme, starts=o.starts, threshold=o.threshold, method=o.method,
-                           coarse_resolution=o.coarse or None,
+                           coarse_resolution=o.coarse or None, informed_start=o.start == "informed",
                            **({} if o.jacobian_updates is None else {"jacobian_updates": o.jacobian_updates}))
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(out / "experiment.json", exp.model_dump_json(indent=2) + "\n")

@@ -10,6 +10,7 @@ import numpy as np
 
 from .errors import RenderError
 from .scene import ProbeScene
+from .appearance import Appearance
 from .schemas import ModelSpec, Value
 
 
@@ -54,6 +55,19 @@ class Adapter(abc.ABC):
     def derived(self, model: str, params: dict[str, Value]) -> dict[str, Value]:
         """Quantities that follow from the parameters, for reports and experiment plots (e.g. a
         conductor's normal-incidence reflectivity from its complex IOR). Must not render."""
+        return {}
+
+    def appearance(self, model: str, params: dict[str, Value]) -> Appearance | None:
+        """The material in renderer-neutral terms, as an exporter would read it, or None when this
+        model has no such reading. Used as a source: it gives the fit its informed start. Must not render."""
+        return None
+
+    def from_appearance(self, model: str, appearance: Appearance, base: dict[str, Value]) -> dict[str, Value]:
+        """This model's parameters for a neutral description by the exporters' conventions (the
+        fit's informed start; the fit corrects them), or {} when there is no such conversion.
+        ``base`` is the model's complete parameters as they stand (defaults, --fix), for a
+        conversion that depends on one the fit keeps. Only fitted parameters are used; values
+        out of bounds are clipped by the caller. Must not render."""
         return {}
 
     def notes(self, model: str, params: dict[str, Value]) -> list[str]:

@@ -52,6 +52,11 @@ class RemapOptions:
     alpha 0.05 to Cycles Glossy came out at 1.74 % polished at 64 px against 0.51 % at 128 px."""
     coarse_tol: float = 1e-2
     """ftol and xtol of the coarse level (its optimum is polished at full resolution anyway)."""
+    informed_start: bool = True
+    """Start from the exporters' conversion of the source (the source adapter's neutral reading of
+    it, written into the target's parameters by the target adapter) instead of the target's
+    defaults, where both adapters give one; the other starts are spread around it as usual.
+    Read by the session; the engine sees only its base point."""
     start_margin: float = 0.05
     """A start of a fresh fit that lies on a bound is moved this far inside it (normalised units).
     TRF started on a bound hardly moves along it (scipy nudges the start 1e-10 inside, and its

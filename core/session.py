@@ -92,6 +92,7 @@ class Outcome:
     adapters: dict[str, Any] = field(default_factory=dict)
     noise: dict[str, float] = field(default_factory=dict)
     renders_by_resolution: dict[int, int] = field(default_factory=dict)
+    start: dict[str, Value] = field(default_factory=dict)
 
 
 class _CachedRenderer:
@@ -186,8 +187,9 @@ def run(job: Job, registry: AdapterRegistry, adapters: dict[str, Adapter], progr
         coarse = _level(job, src, tgt, job.scene.with_(resolution=opts.coarse_resolution))
         if opts.polish_resolution and 2 * opts.polish_resolution <= job.scene.resolution:
             polish = _level(job, src, tgt, job.scene.with_(resolution=opts.polish_resolution))
-    result = remap(job.target_spec, tgt, source_image, lobes, base=job.base, free=job.free, options=opts,
-                   progress=progress, coarse=coarse, polish=polish)
+    start = informed_start(job, adapters) if opts.informed_start else {}
+    result = remap(job.target_spec, tgt, source_image, lobes, base={**job.base, **start}, free=job.free,
+                   options=opts, progress=progress, coarse=coarse, polish=polish)
     # The error two renders of the same material show, source and target noise combined:
     # n_x is the difference of two seeds (√2 σ_x), so the floor is sqrt((n_s² + n_t²) / 2).
     target_noise = relative_rmse(result.target_image, tgt(result.params, scene=job.scene.with_(seed=job.scene.seed + 1)))
@@ -199,7 +201,29 @@ def run(job: Job, registry: AdapterRegistry, adapters: dict[str, Adapter], progr
     info = {n: {"plugin": registry.get(n).plugin, **a.describe()} for n, a in adapters.items()}
     return Outcome(job, result, source_image, noise_floor, src_cache.misses, info,
                    noise={"source": source_noise, "target": target_noise},
-                   renders_by_resolution=dict(sorted(tgt.by_resolution.items())))
+                   renders_by_resolution=dict(sorted(tgt.by_resolution.items())), start=start)
+
+
+def informed_start(job: Job, adapters: dict[str, Adapter]) -> dict[str, Value]:
+    """The exporters' conversion of the source into the target's fitted parameters (clipped to
+    their bounds), or {} when either adapter has no neutral reading for its model. A value of
+    the wrong shape or not finite is left out: the start is a hint, the fit does not need it."""
+    look = adapters[job.source.adapter].appearance(job.source.model, job.source_params)
+    if look is None:
+        return {}
+    conv = adapters[job.target_adapter].from_appearance(job.target_model, look, dict(job.base))
+    out: dict[str, Value] = {}
+    for name in job.free:
+        spec = job.target_spec.param(name)
+        try:
+            vals = [float(x) for x in conv[name]] if spec.kind == "rgb" else [float(conv[name])]  # type: ignore
+        except (KeyError, TypeError, ValueError):
+            continue
+        if len(vals) != (3 if spec.kind == "rgb" else 1) or not all(map(math.isfinite, vals)):
+            continue
+        vals = [min(max(x, spec.lower), spec.upper) for x in vals]
+        out[name] = tuple(vals) if spec.kind == "rgb" else vals[0]  # type: ignore[assignment]
+    return out
 
 
 def _renderer_notes(result: RemapResult, notes: list[str]) -> None:
@@ -264,6 +288,8 @@ def result_document(outcome: Outcome) -> dict[str, Any]:
             "noise_target": outcome.noise.get("target"),
             "jacobian_condition": _finite_or_none(r.jacobian_condition),
         },
+        "start": {"informed": bool(outcome.start),
+                  "params": {k: _jsonable(_round(v)) for k, v in outcome.start.items()}},
         "renders": r.renders,
         "renders_by_resolution": {f"{k}px": v for k, v in outcome.renders_by_resolution.items()},
         "source_renders": outcome.source_renders,

@@ -95,7 +95,8 @@ class AdapterContract:
             factory = MyAdapter                       # the registered class
             calibration = ("diffuse", {"reflectance": 0.8})   # a white Lambertian, albedo 0.8
 
-    The checks: image shape, dtype, finiteness and black background for every model;
+    The checks: image shape, dtype, finiteness and black background for every model; the
+    optional neutral reading (``appearance``/``from_appearance``) naming only model parameters;
     bit-identical renders for a fixed seed; lobes that sum to the full image; and the white
     diffuse sphere against the analytic radiance (same physical units as every adapter).
     """
@@ -132,6 +133,32 @@ class AdapterContract:
         for name, spec in self.adapter.models.items():
             assert spec.name == name
             spec.complete({})  # defaults are valid
+
+    def test_neutral_reading_names_only_the_models_parameters(self):
+        """Optional: an adapter without ``appearance``/``from_appearance`` passes trivially. Each
+        reading of a model's defaults is an Appearance; each conversion into a model names only
+        its parameters, and they complete (validate) once clipped to their bounds."""
+        from .appearance import Appearance
+
+        looks = [Appearance(kind="conductor", alpha=0.1, specular=(0.9, 0.6, 0.3)),
+                 Appearance(kind="dielectric", alpha=0.2, specular=(0.04,) * 3, diffuse=(0.6, 0.1, 0.05), ior=1.5),
+                 Appearance(kind="dielectric", diffuse=(0.8, 0.8, 0.8))]
+        for name, spec in self.adapter.models.items():
+            look = self.adapter.appearance(name, spec.complete({}))
+            assert look is None or isinstance(look, Appearance), name
+            for a in looks:
+                conv = self.adapter.from_appearance(name, a, spec.complete({}))
+                assert set(conv) <= set(spec.names), (name, set(conv) - set(spec.names))
+                clipped = {}
+                for k, v in conv.items():
+                    p = spec.param(k)
+                    if p.kind == "choice":
+                        clipped[k] = v
+                    elif p.kind == "rgb":
+                        clipped[k] = tuple(min(max(float(x), p.lower), p.upper) for x in v)  # type: ignore[union-attr]
+                    else:
+                        clipped[k] = min(max(float(v), p.lower), p.upper)  # type: ignore[arg-type]
+                spec.complete(clipped)
 
     def test_render_shape_dtype_finite_black_background(self):
         n = self.scene.resolution

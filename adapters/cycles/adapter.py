@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from brdfremap.core.appearance import Appearance
 from brdfremap.core.atomic import temp_beside, write_text_atomic
 from brdfremap.core.errors import ConfigError, RenderError
 from brdfremap.core.protocol import Adapter
@@ -24,6 +25,7 @@ from brdfremap.core.scene import ProbeScene
 from brdfremap.core.schemas import Value
 from brdfremap.core.workerproc import JsonLinesWorker
 
+from . import appearance as _appearance
 from .material import python_snippet
 from .models import MODELS
 
@@ -241,6 +243,12 @@ class CyclesAdapter(Adapter):
         if wanted >= 2 and not self._extra and self.n_workers > 1:
             self._start_extras()
         return [self.worker, *self._extra]
+
+    def appearance(self, model: str, params: dict[str, Value]) -> Appearance | None:
+        return _appearance.appearance(model, params)
+
+    def from_appearance(self, model: str, appearance: Appearance, base: dict[str, Value]) -> dict[str, Value]:
+        return _appearance.from_appearance(model, appearance, base)
 
     def write_native(self, model: str, params: dict[str, Value], out_dir: Path) -> list[Path]:
         out_dir = Path(out_dir)

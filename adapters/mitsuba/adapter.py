@@ -11,17 +11,19 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from brdfremap.core.appearance import Appearance, eta_k_from_reflectivity, reflectivity_edge_tint
 from brdfremap.core.atomic import write_text_atomic
 from brdfremap.core.errors import ConfigError, RenderError
 from brdfremap.core.protocol import Adapter
 from brdfremap.core.scene import ProbeScene
 from brdfremap.core.schemas import Value
 
-from .bsdfs import conductor_preset, eta_k_from_reflectivity, reflectivity_edge_tint, register_bsdfs, trim_scale
+from . import appearance as _appearance
+from .appearance import EXT_IOR
+from .bsdfs import conductor_preset, register_bsdfs, trim_scale
 from .models import MODELS
 from .variant import as_dict, choose_variant
 
-EXT_IOR = 1.000277  # Mitsuba's default exterior medium (air)
 
 
 def _rgb(v: Value) -> dict:
@@ -267,6 +269,12 @@ class MitsubaAdapter(Adapter):
                     "effective_specular_reflectance": tuple(s * x for x in p["specular_reflectance"]),  # type: ignore
                     "effective_diffuse_reflectance": tuple(s * x for x in p["diffuse_reflectance"])}  # type: ignore
         return {}
+
+    def appearance(self, model: str, params: dict[str, Value]) -> Appearance | None:
+        return _appearance.appearance(model, params, conductor_preset)
+
+    def from_appearance(self, model: str, appearance: Appearance, base: dict[str, Value]) -> dict[str, Value]:
+        return _appearance.from_appearance(model, appearance)
 
     def notes(self, model: str, params: dict[str, Value]) -> list[str]:
         return energy_notes(model, params)

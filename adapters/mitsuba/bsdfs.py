@@ -24,6 +24,8 @@ from typing import Any
 
 import numpy as np
 
+from brdfremap.core.appearance import eta_k_from_reflectivity
+
 INV_PI = 1.0 / math.pi
 INV_TWOPI = 0.5 / math.pi
 WARD_VARIANTS = ("ward", "ward-duer", "balanced")
@@ -82,28 +84,6 @@ def fresnel_conductor_np(cos_i: np.ndarray, eta: np.ndarray, k: np.ndarray) -> n
     term4 = term2 * s2
     rp = rs * (term3 - term4) / (term3 + term4)
     return 0.5 * (rp + rs)
-
-
-def reflectivity_edge_tint(eta: Any, k: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Normal-incidence reflectivity r and edge tint g of a conductor (Gulbrandsen 2014)."""
-    n, kk = np.asarray(eta, dtype=float), np.asarray(k, dtype=float)
-    r = ((n - 1) ** 2 + kk**2) / ((n + 1) ** 2 + kk**2)
-    r = np.clip(r, 0.0, 0.999999)
-    sr = np.sqrt(r)
-    n_min, n_max = (1 - r) / (1 + r), (1 + sr) / (1 - sr)
-    g = (n_max - n) / (n_max - n_min)
-    return r, g
-
-
-def eta_k_from_reflectivity(r: Any, g: Any) -> tuple[np.ndarray, np.ndarray]:
-    """The complex IOR with reflectivity r and edge tint g (Gulbrandsen 2014, exact inverse)."""
-    r = np.clip(np.asarray(r, dtype=float), 0.0, 0.999999)
-    g = np.asarray(g, dtype=float)
-    sr = np.sqrt(r)
-    n_min, n_max = (1 - r) / (1 + r), (1 + sr) / (1 - sr)
-    n = g * n_min + (1 - g) * n_max
-    k2 = (r * (n + 1) ** 2 - (n - 1) ** 2) / (1 - r)
-    return n, np.sqrt(np.maximum(k2, 0.0))
 
 
 @lru_cache(maxsize=None)

@@ -30,6 +30,9 @@ def test_main_job_gold_to_principled(tmp_path, root, mitsuba_adapter, cycles_ada
         assert (out / name).stat().st_size > 0, name
     p = r["params"]
     assert p["metallic"] > 0.9
+    # It started from the exporters' conversion: Au's F0 as Base Color, Metallic 1, roughness √α.
+    assert r["start"]["informed"] and r["start"]["params"]["metallic"] == 1.0
+    assert abs(r["start"]["params"]["roughness"] - 0.1**0.5) < 1e-6
     assert p["base_color"][0] > p["base_color"][1] > p["base_color"][2]  # gold
     # Beckmann gold -> multiscatter GGX has a floor near 18-21 %: a mismatch, flagged.
     assert 0.12 < r["metrics"]["relative_rmse"] < 0.25

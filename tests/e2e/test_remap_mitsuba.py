@@ -38,11 +38,19 @@ def test_gold_beckmann_to_ggx_writes_the_contract(tmp_path, root, mitsuba_adapte
 
 
 def test_identity_ggx_recovers_alpha_within_one_percent(tmp_path, root, mitsuba_adapter):
-    _, r = _run(tmp_path, root, "aluminium-ggx.yaml", "--adapter", "mitsuba", "--model", "roughconductor")
+    _, r = _run(tmp_path, root, "aluminium-ggx.yaml", "--adapter", "mitsuba", "--model", "roughconductor",
+                "--start", "defaults")
+    assert r["start"] == {"informed": False, "params": {}}
     assert abs(r["params"]["alpha"] / 0.3 - 1) < 0.01
     assert r["metrics"]["relative_rmse"] <= r["metrics"]["noise_floor"]
     assert r["stages"][0]["start_error"] > 10 * r["metrics"]["noise_floor"]  # it did not start at the answer
     assert r["reliable"] is True
+    # From the informed start (the same model: the source's own α) it only has to confirm it.
+    _, informed = _run(tmp_path / "informed", root, "aluminium-ggx.yaml", "--adapter", "mitsuba",
+                       "--model", "roughconductor")
+    assert informed["start"] == {"informed": True, "params": {"alpha": 0.3}}
+    assert informed["metrics"]["relative_rmse"] <= informed["metrics"]["noise_floor"]
+    assert informed["renders"] < r["renders"] / 2 and informed["reliable"] is True
 
 
 @pytest.mark.parametrize("scheme", ["one", "two", "three"])
@@ -105,7 +113,7 @@ def test_joint_rounds_that_do_not_realise_the_predicted_gain_leave_a_note_not_a_
     reg = collect_adapters()
     src = Material(adapter="mitsuba", model="ashikhmin_shirley", params={"material": "AlSb", "alpha": 0.05})
     job = prepare(reg, src, "AlSb", "mitsuba", "ward", ProbeScene(), {"diffuse_reflectance": (0.0, 0.0, 0.0)},
-                  RemapOptions(jacobian_updates=0))
+                  RemapOptions(jacobian_updates=0, informed_start=False))
     r = run(job, reg, {"mitsuba": mitsuba_adapter}).result
     assert [s.name for s in r.stages if s.name.startswith("joint")]  # the rounds ran
     assert r.relative_rmse < 0.006

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from brdfremap.core import Adapter, LobeSpec, ModelSpec, ParamSpec, ProbeScene
+from brdfremap.core import Adapter, Appearance, LobeSpec, ModelSpec, ParamSpec, ProbeScene
 from brdfremap.core.testing import point_light_irradiance, sphere_hits
 
 TOY = ModelSpec(
@@ -50,3 +50,16 @@ class ToyAdapter(Adapter):
         spec = p["specular"] * np.exp(-tan2 / a**2) / (math.pi * a**2 * cos_h**4) / 4
         f = np.asarray(p["diffuse"]) / math.pi + spec[..., None]
         return (f * e[..., None]).astype(np.float32)
+
+    # The neutral reading that gives a remap its informed start (optional for an adapter): the
+    # toy's lobe is Gaussian in the half-vector angle like Beckmann's, and its specular weight
+    # stands in for the normal-incidence reflectance.
+    def appearance(self, model, params):
+        return Appearance(kind="dielectric", alpha=params["alpha"], distribution="beckmann",
+                          specular=(params["specular"],) * 3, diffuse=tuple(params["diffuse"]))
+
+    def from_appearance(self, model, appearance, base):
+        out = {"diffuse": appearance.diffuse, "specular": sum(appearance.specular) / 3}
+        if appearance.alpha is not None:
+            out["alpha"] = appearance.alpha
+        return out

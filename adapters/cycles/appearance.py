@@ -1,0 +1,61 @@
+"""Cycles' models read as and written from a renderer-neutral Appearance, by the exporters'
+conventions: Blender's roughness is √α; a Metallic Principled BSDF's Base Color is its F0;
+Specular IOR Level scales the dielectric's F0 by twice itself (0.5: the IOR as given)."""
+
+from __future__ import annotations
+
+import math
+
+from brdfremap.core.appearance import Appearance, conductor_f0, dielectric_f0, ior_from_f0
+from brdfremap.core.schemas import Value
+
+_DIST = {"beckmann": "beckmann", "ggx": "ggx", "multi_ggx": "ggx"}
+
+
+def _rgb(v) -> tuple[float, float, float]:
+    return tuple(float(x) for x in v)  # type: ignore[return-value]
+
+
+def appearance(model: str, p: dict[str, Value]) -> Appearance | None:
+    """How an exporter reads this Cycles material; None for a model without a reading."""
+    alpha = max(float(p.get("roughness", 0.0)) ** 2, 1e-4)  # type: ignore[arg-type]
+    dist = _DIST.get(str(p.get("distribution")))
+    if model == "principled":
+        base, m = _rgb(p["base_color"]), float(p["metallic"])  # type: ignore[arg-type]
+        if m >= 0.5:
+            return Appearance(kind="conductor", alpha=alpha, distribution=dist, specular=base)  # type: ignore
+        f0 = min(dielectric_f0(float(p["ior"])) * 2.0 * float(p["specular_ior_level"]), 1.0)  # type: ignore
+        return Appearance(kind="dielectric", alpha=alpha, distribution=dist, specular=(f0,) * 3,  # type: ignore
+                          diffuse=tuple(c * (1.0 - m) for c in base), ior=ior_from_f0(f0))  # type: ignore[arg-type]
+    if model == "glossy":
+        return Appearance(kind="conductor", alpha=alpha, distribution=dist, specular=_rgb(p["color"]))  # type: ignore
+    if model == "metallic":
+        eta, k = _rgb(p["ior"]), _rgb(p["extinction"])
+        return Appearance(kind="conductor", alpha=alpha, distribution=dist,  # type: ignore[arg-type]
+                          specular=conductor_f0(eta, k), eta=eta, k=k)
+    if model == "diffuse":
+        return Appearance(kind="dielectric", diffuse=_rgb(p["color"]))
+    return None
+
+
+def from_appearance(model: str, a: Appearance, base: dict[str, Value]) -> dict[str, Value]:
+    """This Cycles model's parameters for a neutral description, by the exporters' conventions."""
+    metal = a.kind == "conductor"
+    out: dict[str, Value] = {}
+    if a.alpha is not None and model != "diffuse":
+        out["roughness"] = math.sqrt(a.alpha)
+    if model == "principled":
+        out.update(base_color=a.specular if metal else a.diffuse, metallic=1.0 if metal else 0.0)
+        if not metal:
+            f0 = float(sum(a.specular)) / 3
+            out["specular_ior_level"] = 0.5 * f0 / dielectric_f0(float(base["ior"]))  # type: ignore[arg-type]
+    elif model == "glossy":
+        out["color"] = a.specular
+    elif model == "metallic":
+        eta, k = a.conductor_ior()
+        out.update(ior=eta, extinction=k)
+    elif model == "diffuse":
+        out["color"] = a.specular if metal else a.diffuse
+    else:
+        return {}
+    return out

@@ -1,0 +1,122 @@
+"""The neutral reading of materials (the informed start): Fresnel arithmetic, each adapter's
+reading and writing (pure functions, no renderer), and the session's use of it."""
+
+import math
+import types
+
+import numpy as np
+import pytest
+
+from brdfremap.adapters.cycles import appearance as cycles
+from brdfremap.adapters.mitsuba import appearance as mitsuba
+from brdfremap.adapters.cycles.models import MODELS as CYCLES
+from brdfremap.adapters.mitsuba.models import MODELS as MITSUBA
+from brdfremap.core import hookimpl
+from brdfremap.core.appearance import (Appearance, conductor_f0, dielectric_f0, eta_k_from_reflectivity, ior_from_f0,
+                                       reflectivity_edge_tint)
+from brdfremap.core.plugins import collect_adapters, get_plugin_manager
+from brdfremap.core.remap import RemapOptions
+from brdfremap.core.scene import ProbeScene
+from brdfremap.core.schemas import Material
+from brdfremap.core.session import informed_start, open_adapters, prepare, result_document, run
+from brdfremap_example.adapter import ToyAdapter
+
+GOLD = ((0.143, 0.374, 1.442), (3.983, 2.385, 1.603))  # Mitsuba's Au preset in RGB, near enough
+
+
+def test_fresnel_helpers_invert_each_other():
+    assert dielectric_f0(1.5) == pytest.approx(0.04)
+    assert ior_from_f0(dielectric_f0(1.3)) == pytest.approx(1.3)
+    r, g = reflectivity_edge_tint(*GOLD)
+    n, k = eta_k_from_reflectivity(r, g)
+    assert np.allclose(n, GOLD[0]) and np.allclose(k, GOLD[1])
+    assert np.allclose(conductor_f0(*GOLD), r)
+    assert conductor_f0(*GOLD)[0] > conductor_f0(*GOLD)[1] > conductor_f0(*GOLD)[2]  # gold is yellow
+
+
+def test_mitsuba_gold_reads_as_a_conductor_and_writes_principled_by_the_exporters_rule():
+    src = MITSUBA["roughconductor"].complete({"material": "none", "eta": GOLD[0], "k": GOLD[1], "alpha": 0.1})
+    look = mitsuba.appearance("roughconductor", src, preset=lambda name: pytest.fail("no preset asked"))
+    assert look.kind == "conductor" and look.alpha == 0.1 and look.distribution == "beckmann"
+    assert look.specular == pytest.approx(conductor_f0(*GOLD))
+    out = cycles.from_appearance("principled", look, CYCLES["principled"].complete({}))
+    assert out == {"roughness": pytest.approx(math.sqrt(0.1)), "base_color": look.specular, "metallic": 1.0}
+    # Cycles' own conductor takes the complex IOR itself.
+    assert cycles.from_appearance("metallic", look, {}) == {"roughness": pytest.approx(math.sqrt(0.1)),
+                                                           "ior": GOLD[0], "extinction": GOLD[1]}
+
+
+def test_a_plastic_keeps_its_reflectance_through_specular_ior_level():
+    """Principled's IOR is not fitted (1.5): a plastic of IOR 1.3 reaches its lower F0 through
+    Specular IOR Level (0.5 is the IOR as given, F0 scales with twice the level)."""
+    src = MITSUBA["roughplastic"].complete({"diffuse_reflectance": (0.6, 0.1, 0.05), "alpha": 0.2, "int_ior": 1.3})
+    look = mitsuba.appearance("roughplastic", src, preset=None)
+    assert look.kind == "dielectric" and look.diffuse == (0.6, 0.1, 0.05)
+    out = cycles.from_appearance("principled", look, CYCLES["principled"].complete({}))
+    assert out["metallic"] == 0.0 and out["base_color"] == (0.6, 0.1, 0.05)
+    assert 2 * out["specular_ior_level"] * dielectric_f0(1.5) == pytest.approx(dielectric_f0(1.3 / mitsuba.EXT_IOR))
+    # And back: Cycles' reading of that Principled BSDF is the plastic again.
+    back = cycles.appearance("principled", CYCLES["principled"].complete(out))
+    assert back.ior == pytest.approx(1.3 / mitsuba.EXT_IOR) and back.alpha == pytest.approx(0.2)
+    again = mitsuba.from_appearance("roughplastic", back)
+    assert again["int_ior"] == pytest.approx(1.3) and again["alpha"] == pytest.approx(0.2)
+
+
+@pytest.mark.parametrize("model, params", [
+    ("phong", {"exponent": 98.0, "specular_reflectance": (0.9, 0.6, 0.3), "diffuse_reflectance": (0, 0, 0)}),
+    ("ward", {"alpha": 0.1, "specular_reflectance": (0.9, 0.6, 0.3), "diffuse_reflectance": (0.2, 0.2, 0.2)}),
+])
+def test_the_paper_models_carry_phongs_exponent_rule(model, params):
+    """n = 2/α² − 2 both ways (α 0.1 ↔ n 198 would be wrong: n 98 ↔ α = √(2/100))."""
+    look = mitsuba.appearance(model, MITSUBA[model].complete(params), preset=None)
+    assert look.alpha == pytest.approx(0.1 if model == "ward" else math.sqrt(2 / 100))
+    assert look.kind == ("conductor" if model == "phong" else "dielectric")
+    assert mitsuba.from_appearance("phong", Appearance(kind="conductor", alpha=0.1))["exponent"] == pytest.approx(198)
+
+
+def test_a_model_without_a_reading_gives_none_and_no_conversion():
+    assert mitsuba.appearance("nonesuch", {}, preset=None) is None
+    assert cycles.from_appearance("nonesuch", Appearance(kind="conductor", alpha=0.1), {}) == {}
+
+
+def _toy_registry():
+    mod = types.ModuleType("toyplug")
+
+    @hookimpl
+    def brdfremap_register_adapters(register):
+        register("toy", ToyAdapter)
+
+    mod.brdfremap_register_adapters = brdfremap_register_adapters
+    return collect_adapters(get_plugin_manager(load_entrypoints=False, plugins=(mod,)))
+
+
+def test_the_session_starts_from_the_conversion_of_free_parameters_only_within_bounds():
+    reg = _toy_registry()
+    src = Material(adapter="toy", model="toy", params={"diffuse": [0.6, 0.3, 0.1], "specular": 0.8, "alpha": 0.15})
+    scene = ProbeScene(resolution=48)
+    opts = RemapOptions(scheme="one", coarse_resolution=None)
+    job = prepare(reg, src, "src.yaml", "toy", "toy", scene, {"specular": 0.5}, opts)
+    with open_adapters(reg, ["toy"]) as ads:
+        start = informed_start(job, ads)
+        assert start == {"diffuse": (0.6, 0.3, 0.1), "alpha": 0.15}  # specular is fixed: not touched
+        ads["toy"].from_appearance = lambda m, a, b: {"diffuse": (1.7, -0.2, 0.5), "alpha": 9.0, "unused": 0.3}
+        assert informed_start(job, ads) == {"diffuse": (1.0, 0.0, 0.5), "alpha": 1.0}  # clipped; unused not free
+        ads["toy"].from_appearance = lambda m, a, b: {"diffuse": 0.5, "alpha": float("nan")}
+        assert informed_start(job, ads) == {}  # a hint of the wrong shape or not finite is left out
+
+
+def test_an_informed_start_saves_renders_and_is_reported(tmp_path):
+    reg = _toy_registry()
+    src = Material(adapter="toy", model="toy", params={"diffuse": [0.6, 0.3, 0.1], "specular": 0.8, "alpha": 0.15})
+    scene = ProbeScene(resolution=48)
+    out = {}
+    with open_adapters(reg, ["toy"]) as ads:
+        for informed in (True, False):
+            job = prepare(reg, src, "src.yaml", "toy", "toy", scene, {},
+                          RemapOptions(scheme="one", coarse_resolution=None, informed_start=informed))
+            out[informed] = run(job, reg, ads)
+    assert out[True].result.renders < out[False].result.renders
+    assert out[True].result.relative_rmse < 1e-3
+    doc = result_document(out[True])
+    assert doc["start"] == {"informed": True, "params": {"diffuse": [0.6, 0.3, 0.1], "specular": 0.8, "alpha": 0.15}}
+    assert result_document(out[False])["start"] == {"informed": False, "params": {}}
