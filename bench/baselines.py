@@ -10,6 +10,8 @@ from __future__ import annotations
 import math
 from functools import lru_cache
 
+from brdfremap.core.appearance import conductor_f0
+
 
 @lru_cache(maxsize=None)
 def preset_eta_k(material: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
@@ -19,10 +21,6 @@ def preset_eta_k(material: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
 
     MitsubaAdapter()  # selects the variant
     return conductor_preset(material)
-
-
-def f0(eta, k):
-    return tuple(((n - 1) ** 2 + kk**2) / ((n + 1) ** 2 + kk**2) for n, kk in zip(eta, k))
 
 
 def _conductor(src):
@@ -40,7 +38,7 @@ def convert(source_model: str, src: dict, target: str, convention: str) -> dict 
     adapter, model, *dist = target.split(":")
     if source_model == "roughconductor":
         eta, k = _conductor(src)
-        colour = tuple(min(c, 1.0) for c in f0(eta, k))
+        colour = tuple(min(c, 1.0) for c in conductor_f0(eta, k))
         if target.startswith("cycles:principled"):
             return {"base_color": colour, "metallic": 1.0, "roughness": min(rough, 1.0)}
         if target.startswith("cycles:glossy"):
