@@ -58,6 +58,9 @@ def _remap_parser() -> argparse.ArgumentParser:
     p.add_argument("--start", choices=("informed", "defaults"), default="informed",
                    help="first start: the exporters' conversion of the source where both adapters read one "
                         "(default), or the target model's defaults")
+    p.add_argument("--precise-spp", type=int, default=4, metavar="K",
+                   help="a fit that ends within 3x the render noise is polished at K times the samples "
+                        "(default 4; 1: never)")
     p.add_argument("--threshold", type=float, default=0.05,
                    help="relative RMSE above which a result is flagged unreliable (default 0.05)")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
@@ -129,6 +132,8 @@ def cmd_remap(args: argparse.Namespace) -> int:
 
     if args.starts < 1:
         raise ConfigError("must be at least 1", field="--starts")
+    if args.precise_spp < 1:
+        raise ConfigError("must be at least 1 (1: no polish at more samples)", field="--precise-spp")
     if not 0 < args.threshold < 10:
         raise ConfigError("must be a positive fraction such as 0.05", field="--threshold")
     source = load_material(args.source)
@@ -151,7 +156,8 @@ def cmd_remap(args: argparse.Namespace) -> int:
     if args.coarse < 0 or 0 < args.coarse < 8:
         raise ConfigError("must be 0 (off) or at least 8", field="--coarse")
     options = RemapOptions(scheme=args.scheme, starts=args.starts, threshold=args.threshold, method=args.method,
-                           coarse_resolution=args.coarse or None, informed_start=args.start == "informed")
+                           coarse_resolution=args.coarse or None, informed_start=args.start == "informed",
+                           precise_spp=args.precise_spp)
     job = prepare(registry, source, str(args.source), args.adapter, args.model, scene, fixed, options)
     out = Path(args.out)
     if out.exists() and not out.is_dir():

@@ -21,10 +21,10 @@ from .atomic import write_json_atomic
 from .cache import RenderCache, render_key
 from .errors import ConfigError
 from .imageio import write_exr, write_previews
-from .metrics import error_map, relative_rmse
+from .metrics import delta_e_itp, error_map, relative_rmse
 from .plugins import AdapterRegistry
 from .protocol import Adapter, check_image
-from .remap import ENGINE, Level, ProgressFn, RemapOptions, RemapResult, remap
+from .remap import ENGINE, Level, ParamSpace, ProgressFn, RemapOptions, RemapResult, remap
 from .scene import ProbeScene
 from .schemas import Material, ModelSpec, Value
 
@@ -190,6 +190,8 @@ def run(job: Job, registry: AdapterRegistry, adapters: dict[str, Adapter], progr
     start = informed_start(job, adapters) if opts.informed_start else {}
     result = remap(job.target_spec, tgt, source_image, lobes, base={**job.base, **start}, free=job.free,
                    options=opts, progress=progress, coarse=coarse, polish=polish)
+    if opts.precise_spp > 1 and job.free and result.relative_rmse < opts.precise_below * source_noise:
+        result = _precise_polish(job, src, tgt, result, source_image, source_noise, opts, progress)
     # The error two renders of the same material show, source and target noise combined:
     # n_x is the difference of two seeds (√2 σ_x), so the floor is sqrt((n_s² + n_t²) / 2).
     target_noise = relative_rmse(result.target_image, tgt(result.params, scene=job.scene.with_(seed=job.scene.seed + 1)))
@@ -202,6 +204,35 @@ def run(job: Job, registry: AdapterRegistry, adapters: dict[str, Adapter], progr
     return Outcome(job, result, source_image, noise_floor, src_cache.misses, info,
                    noise={"source": source_noise, "target": target_noise},
                    renders_by_resolution=dict(sorted(tgt.by_resolution.items())), start=start)
+
+
+def _precise_polish(job: Job, src: _CachedRenderer, tgt: _CachedRenderer, result: RemapResult,
+                    source_image: np.ndarray, source_noise: float, opts: RemapOptions,
+                    progress: ProgressFn | None) -> RemapResult:
+    """The fit ended within a few times the render noise: what is left is noise, which more
+    samples halve (4×) where more iterations cannot. One short one-stage polish of every free
+    parameter from the result, source and target at ``precise_spp`` times the samples; kept if
+    it lowers the error there. The result's error is still measured at the scene's sampling."""
+    scene = job.scene.with_(spp=job.scene.spp * opts.precise_spp)
+    source = src(job.source_params, scene=scene)
+    jac = ParamSpace(job.target_spec, result.params, job.free).jacobian_renders(opts.separable_rgb)
+    popts = replace(opts, scheme="one", starts=1, coarse_resolution=None, polish_resolution=None, start_margin=0.0,
+                    joint_rounds=0, good_enough=0.0, max_renders_per_stage=1 + jac + opts.fine_steps)
+    fine = remap(job.target_spec, _LevelRenderer(tgt, scene), source, {}, base=result.params, free=job.free,
+                 options=popts, progress=progress)
+    before = fine.stages[0].start_error
+    if not fine.relative_rmse < before:
+        return result
+    final = tgt(fine.params)
+    note = (f"noise-limited (error {result.relative_rmse:.2%}, within {opts.precise_below:g}x the source's render noise "
+            f"{source_noise:.2%}): polished at {scene.spp} spp, {before:.3%} -> {fine.relative_rmse:.3%} there")
+    for stage in fine.stages:
+        stage.name = f"precise@{scene.spp}spp"
+        if stage.status.startswith("stopped at the render budget"):
+            stage.status = f"converged (polished from the fit in {stage.renders} renders)"
+    return replace(result, params=fine.params, relative_rmse=relative_rmse(source_image, final),
+                   perceptual=delta_e_itp(source_image, final), target_image=final,
+                   stages=result.stages + fine.stages, notes=result.notes + [note])
 
 
 def informed_start(job: Job, adapters: dict[str, Adapter]) -> dict[str, Value]:

@@ -120,3 +120,40 @@ def test_an_informed_start_saves_renders_and_is_reported(tmp_path):
     doc = result_document(out[True])
     assert doc["start"] == {"informed": True, "params": {"diffuse": [0.6, 0.3, 0.1], "specular": 0.8, "alpha": 0.15}}
     assert result_document(out[False])["start"] == {"informed": False, "params": {}}
+
+
+class _NoisyToy(ToyAdapter):
+    """The toy with render noise: 1 % per pixel at 16 spp, falling as 1/√spp; a fixed pattern for a
+    seed and sample count, as a renderer with a fixed seed (so finite differences stay smooth)."""
+
+    def render(self, model, params, scene, lobe=None):
+        img = super().render(model, params, scene, lobe)
+        rng = np.random.default_rng([scene.seed, scene.spp])
+        return (img * (1 + 0.04 / math.sqrt(scene.spp) * rng.standard_normal(img.shape))).astype(np.float32)
+
+
+def test_a_noise_limited_fit_is_polished_at_more_samples():
+    """A fit that ends within a few times the render noise is polished at 4x the samples: the
+    parameters land closer to the truth than the fit at the scene's samples leaves them."""
+    mod = types.ModuleType("noisyplug")
+
+    @hookimpl
+    def brdfremap_register_adapters(register):
+        register("toy", _NoisyToy)
+
+    mod.brdfremap_register_adapters = brdfremap_register_adapters
+    reg = collect_adapters(get_plugin_manager(load_entrypoints=False, plugins=(mod,)))
+    truth = {"diffuse": [0.6, 0.3, 0.1], "specular": 0.8, "alpha": 0.15}
+    src = Material(adapter="toy", model="toy", params=truth)
+    scene = ProbeScene(resolution=48, spp=16)
+    out = {}
+    with open_adapters(reg, ["toy"]) as ads:
+        for factor in (1, 4):
+            job = prepare(reg, src, "src.yaml", "toy", "toy", scene, {},
+                          RemapOptions(scheme="one", coarse_resolution=None, informed_start=False, precise_spp=factor))
+            out[factor] = run(job, reg, ads).result
+    assert [s.name for s in out[4].stages][-1] == "precise@64spp"
+    assert any(n.startswith("noise-limited") for n in out[4].notes)
+    assert not any(n.startswith("noise-limited") for n in out[1].notes)
+    off = {f: abs(out[f].params["alpha"] / truth["alpha"] - 1) for f in out}
+    assert off[4] < off[1]
