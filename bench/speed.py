@@ -10,9 +10,10 @@ For each case (a source material and a target model):
             128², 64 spp, a finite-difference Jacobian every iteration
   default   brdf-remap's default (scheme auto: two-stage where the target's lobes divide its
             parameters, else one-stage; 4 starts, the first the exporters' conversion; most iterations at 32 px, polished at the
-            scene's 128², 16 spp; Jacobians updated from the steps (Broyden) between rendered ones)
+            scene's 128², 16 spp, and at 64 spp when the fit ends within 3x the render noise;
+            Jacobians updated from the steps (Broyden) between rendered ones)
   default, ...   (--subset, --quick) the default with one speed-up undone, to measure it:
-            starts from the target's defaults (not the conversion), unscaled starts (no per-start scale of a reflectance its lobe is proportional to),
+            starts from the target's defaults (not the conversion), no polish at more samples, unscaled starts (no per-start scale of a reflectance its lobe is proportional to),
             no Jacobian updates, polish at 64 px, the two-stage scheme, a polish of every parameter
             (none held as settled by the coarse fit), and the joint refinement of two-stage results as it was (one round, 0.5-point trigger)
 Every method's parameters are scored on one evaluation render (128², 64 spp, seed 7) against
@@ -82,6 +83,7 @@ PAPER_SAMPLE = {(f"{m} β α={a:g}", t) for m, a, t in (
     ("Au", 0.1, "cycles:glossy:beckmann"), ("Cr", 0.4, "cycles:glossy:beckmann"))} | \
     {(PLASTICS[i].name, "cycles:principled") for i in (1, 3)}
 VARIANTS = {"default, starts from the defaults": dict(informed_start=False),
+            "default, no polish at more samples": dict(precise_spp=1),
             "default, unscaled starts": dict(linear_starts=False),
             "default, no Jacobian updates": dict(jacobian_updates=0),
             "default, polish at 64 px": dict(polish_resolution=64),
