@@ -177,7 +177,7 @@ def cmd_remap(args: argparse.Namespace) -> int:
         ("perceptual", f"{r.perceptual:.2f} mean ΔE_ITP"),
         ("start", "the exporters' conversion: " + _fmt_params(outcome.start) if outcome.start
                   else "the target's defaults"),
-        ("renders", f"{r.renders} target ({', '.join(f'{v} at {k}px' for k, v in outcome.renders_by_resolution.items())})"
+        ("renders", f"{r.renders} target ({', '.join(f'{v} at {k}' for k, v in outcome.renders_by_resolution.items())})"
                     f" + {outcome.source_renders} source"),
         ("seconds", f"{r.seconds:.2f}"),
         ("scheme", r.scheme if r.scheme == r.scheme_used else f"{r.scheme} (used {r.scheme_used})"),

@@ -91,14 +91,15 @@ class Outcome:
     source_renders: int
     adapters: dict[str, Any] = field(default_factory=dict)
     noise: dict[str, float] = field(default_factory=dict)
-    renders_by_resolution: dict[int, int] = field(default_factory=dict)
+    renders_by_resolution: dict[str, int] = field(default_factory=dict)
+    """Target renders by "32px", "128px" (the scene's samples) and e.g. "128px@64spp" (more samples)."""
     start: dict[str, Value] = field(default_factory=dict)
 
 
 class _CachedRenderer:
     def __init__(self, adapter: Adapter, name: str, model: str, scene: ProbeScene, cache: RenderCache):
         self.adapter, self.name, self.model, self.scene, self.cache = adapter, name, model, scene, cache
-        self.by_resolution: collections.Counter[int] = collections.Counter()
+        self.by_resolution: collections.Counter[tuple[int, int]] = collections.Counter()  # (resolution, spp)
 
     def _key(self, params: dict[str, Value], lobe: str | None, scene: ProbeScene) -> str:
         return render_key(self.name, self.model, {k: _round(v) for k, v in params.items()}, scene.cache_key(), lobe)
@@ -109,7 +110,7 @@ class _CachedRenderer:
         who = f"adapter {self.name!r} model {self.model!r}"
 
         def render():
-            self.by_resolution[sc.resolution] += 1
+            self.by_resolution[sc.resolution, sc.spp] += 1
             return check_image(self.adapter.render(self.model, dict(params), sc, lobe), sc, who)
 
         return self.cache.get_or_render(key, render)
@@ -128,7 +129,7 @@ class _CachedRenderer:
         who = f"adapter {self.name!r} model {self.model!r}"
         images = self.adapter.render_batch([(self.model, dict(p), sc, lobe) for _, p, lobe in todo])
         for (key, _, _), img in zip(todo, images):
-            self.by_resolution[sc.resolution] += 1
+            self.by_resolution[sc.resolution, sc.spp] += 1
             checked = check_image(img, sc, who)
             self.cache.get_or_render(key, lambda: checked)
 
@@ -203,7 +204,11 @@ def run(job: Job, registry: AdapterRegistry, adapters: dict[str, Adapter], progr
     info = {n: {"plugin": registry.get(n).plugin, **a.describe()} for n, a in adapters.items()}
     return Outcome(job, result, source_image, noise_floor, src_cache.misses, info,
                    noise={"source": source_noise, "target": target_noise},
-                   renders_by_resolution=dict(sorted(tgt.by_resolution.items())), start=start)
+                   renders_by_resolution=_by_resolution(tgt.by_resolution, job.scene.spp), start=start)
+
+
+def _by_resolution(counts: dict[tuple[int, int], int], spp: int) -> dict[str, int]:
+    return {f"{res}px" + ("" if n == spp else f"@{n}spp"): v for (res, n), v in sorted(counts.items())}
 
 
 def _precise_polish(job: Job, src: _CachedRenderer, tgt: _CachedRenderer, result: RemapResult,
@@ -322,7 +327,7 @@ def result_document(outcome: Outcome) -> dict[str, Any]:
         "start": {"informed": bool(outcome.start),
                   "params": {k: _jsonable(_round(v)) for k, v in outcome.start.items()}},
         "renders": r.renders,
-        "renders_by_resolution": {f"{k}px": v for k, v in outcome.renders_by_resolution.items()},
+        "renders_by_resolution": dict(outcome.renders_by_resolution),
         "source_renders": outcome.source_renders,
         "seconds": r.seconds,
         "scheme": r.scheme,

@@ -22,6 +22,10 @@ def test_same_family_mitsuba_conductor_to_cycles_glossy(tmp_path, root, mitsuba_
     m = r["metrics"]
     assert m["relative_rmse"] < 2 * m["noise_floor"], m
     assert r["reliable"] is True
+    # Ended at the render noise, so polished at 4x the samples; its renders are counted apart.
+    byres = r["renders_by_resolution"]
+    assert sum(byres.values()) == r["renders"] and byres.get("128px@64spp", 0) > 0, byres
+    assert any(n.startswith("noise-limited") for n in r["notes"]), r["notes"]
 
 
 def test_main_job_gold_to_principled(tmp_path, root, mitsuba_adapter, cycles_adapter):
