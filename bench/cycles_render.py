@@ -15,7 +15,7 @@ import argparse
 import statistics
 import time
 
-from brdfremap.adapters.cycles.worker import LOBE_PASSES, BlenderState
+from brdfremap.adapters.cycles.worker import BlenderState
 from brdfremap.core.scene import ProbeScene
 
 PARAMS = {"distribution": "multi_ggx", "base_color": [0.9, 0.6, 0.3], "metallic": 1.0, "roughness": 0.3,

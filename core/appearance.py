@@ -36,7 +36,7 @@ class Appearance(_Strict):
         if self.eta is not None and self.k is not None:
             return self.eta, self.k
         n, kk = eta_k_from_reflectivity(self.specular, [edge_tint] * 3)
-        return _rgb(n), _rgb(kk)
+        return as_rgb(n), as_rgb(kk)
 
     def dielectric_ior(self) -> float:
         """The IOR: as given, else the one whose F0 is the mean specular reflectance."""
@@ -45,7 +45,8 @@ class Appearance(_Strict):
         return ior_from_f0(float(np.mean(self.specular)))
 
 
-def _rgb(v: Any) -> RGB:
+def as_rgb(v: Any) -> RGB:
+    """Three floats from a triple or a number (an array, a tuple, a list)."""
     a = np.broadcast_to(np.asarray(v, dtype=float), (3,))
     return (float(a[0]), float(a[1]), float(a[2]))
 
@@ -63,7 +64,7 @@ def ior_from_f0(f0: float) -> float:
 
 def conductor_f0(eta: Any, k: Any) -> RGB:
     """Normal-incidence Fresnel reflectance of a conductor in air, per channel."""
-    return _rgb(reflectivity_edge_tint(eta, k)[0])
+    return as_rgb(reflectivity_edge_tint(eta, k)[0])
 
 
 def reflectivity_edge_tint(eta: Any, k: Any) -> tuple[np.ndarray, np.ndarray]:

@@ -8,9 +8,9 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from .appearance import Appearance
 from .errors import RenderError
 from .scene import ProbeScene
-from .appearance import Appearance
 from .schemas import ModelSpec, Value
 
 

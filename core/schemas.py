@@ -62,6 +62,17 @@ class ParamSpec(_Strict):
     def size(self) -> int:
         return {"scalar": 1, "rgb": 3, "choice": 0}[self.kind]
 
+    def clip(self, value: Any) -> Value:
+        """A number (or RGB triple) moved into the bounds; a choice as given. TypeError or
+        ValueError for a value of the wrong shape; NaN stays NaN."""
+        if self.kind == "choice":
+            return value
+        vals = [float(x) for x in value] if self.kind == "rgb" else [float(value)]
+        if len(vals) != self.size:
+            raise ValueError(f"{self.name}: expected {self.size} numbers, got {len(vals)}")
+        vals = [min(max(x, self.lower), self.upper) for x in vals]
+        return tuple(vals) if self.kind == "rgb" else vals[0]  # type: ignore[return-value]
+
     def coerce(self, value: Any, where: str, file: str | None = None) -> Value:
         """Validate a user value and return it in canonical form (float, 3-tuple or str)."""
         if self.kind == "choice":

@@ -250,15 +250,12 @@ def informed_start(job: Job, adapters: dict[str, Adapter]) -> dict[str, Value]:
     conv = adapters[job.target_adapter].from_appearance(job.target_model, look, dict(job.base))
     out: dict[str, Value] = {}
     for name in job.free:
-        spec = job.target_spec.param(name)
         try:
-            vals = [float(x) for x in conv[name]] if spec.kind == "rgb" else [float(conv[name])]  # type: ignore
+            v = job.target_spec.param(name).clip(conv[name])
         except (KeyError, TypeError, ValueError):
             continue
-        if len(vals) != (3 if spec.kind == "rgb" else 1) or not all(map(math.isfinite, vals)):
-            continue
-        vals = [min(max(x, spec.lower), spec.upper) for x in vals]
-        out[name] = tuple(vals) if spec.kind == "rgb" else vals[0]  # type: ignore[assignment]
+        if all(map(math.isfinite, v if isinstance(v, tuple) else (v,))):  # type: ignore[arg-type]
+            out[name] = v
     return out
 
 

@@ -149,16 +149,7 @@ class AdapterContract:
             for a in looks:
                 conv = self.adapter.from_appearance(name, a, spec.complete({}))
                 assert set(conv) <= set(spec.names), (name, set(conv) - set(spec.names))
-                clipped = {}
-                for k, v in conv.items():
-                    p = spec.param(k)
-                    if p.kind == "choice":
-                        clipped[k] = v
-                    elif p.kind == "rgb":
-                        clipped[k] = tuple(min(max(float(x), p.lower), p.upper) for x in v)  # type: ignore[union-attr]
-                    else:
-                        clipped[k] = min(max(float(v), p.lower), p.upper)  # type: ignore[arg-type]
-                spec.complete(clipped)
+                spec.complete({k: spec.param(k).clip(v) for k, v in conv.items()})
 
     def test_render_shape_dtype_finite_black_background(self):
         n = self.scene.resolution

@@ -6,14 +6,10 @@ from __future__ import annotations
 
 import math
 
-from brdfremap.core.appearance import Appearance, conductor_f0, dielectric_f0, ior_from_f0
+from brdfremap.core.appearance import Appearance, as_rgb, conductor_f0, dielectric_f0, ior_from_f0
 from brdfremap.core.schemas import Value
 
 _DIST = {"beckmann": "beckmann", "ggx": "ggx", "multi_ggx": "ggx"}
-
-
-def _rgb(v) -> tuple[float, float, float]:
-    return tuple(float(x) for x in v)  # type: ignore[return-value]
 
 
 def appearance(model: str, p: dict[str, Value]) -> Appearance | None:
@@ -21,20 +17,20 @@ def appearance(model: str, p: dict[str, Value]) -> Appearance | None:
     alpha = max(float(p.get("roughness", 0.0)) ** 2, 1e-4)  # type: ignore[arg-type]
     dist = _DIST.get(str(p.get("distribution")))
     if model == "principled":
-        base, m = _rgb(p["base_color"]), float(p["metallic"])  # type: ignore[arg-type]
+        base, m = as_rgb(p["base_color"]), float(p["metallic"])  # type: ignore[arg-type]
         if m >= 0.5:
             return Appearance(kind="conductor", alpha=alpha, distribution=dist, specular=base)  # type: ignore
         f0 = min(dielectric_f0(float(p["ior"])) * 2.0 * float(p["specular_ior_level"]), 1.0)  # type: ignore
         return Appearance(kind="dielectric", alpha=alpha, distribution=dist, specular=(f0,) * 3,  # type: ignore
                           diffuse=tuple(c * (1.0 - m) for c in base), ior=ior_from_f0(f0))  # type: ignore[arg-type]
     if model == "glossy":
-        return Appearance(kind="conductor", alpha=alpha, distribution=dist, specular=_rgb(p["color"]))  # type: ignore
+        return Appearance(kind="conductor", alpha=alpha, distribution=dist, specular=as_rgb(p["color"]))  # type: ignore
     if model == "metallic":
-        eta, k = _rgb(p["ior"]), _rgb(p["extinction"])
+        eta, k = as_rgb(p["ior"]), as_rgb(p["extinction"])
         return Appearance(kind="conductor", alpha=alpha, distribution=dist,  # type: ignore[arg-type]
                           specular=conductor_f0(eta, k), eta=eta, k=k)
     if model == "diffuse":
-        return Appearance(kind="dielectric", diffuse=_rgb(p["color"]))
+        return Appearance(kind="dielectric", diffuse=as_rgb(p["color"]))
     return None
 
 

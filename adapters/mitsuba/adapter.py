@@ -11,7 +11,8 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from brdfremap.core.appearance import Appearance, eta_k_from_reflectivity, reflectivity_edge_tint
+from brdfremap.core.appearance import (Appearance, as_rgb, dielectric_f0, eta_k_from_reflectivity,
+                                      reflectivity_edge_tint)
 from brdfremap.core.atomic import write_text_atomic
 from brdfremap.core.errors import ConfigError, RenderError
 from brdfremap.core.protocol import Adapter
@@ -258,10 +259,9 @@ class MitsubaAdapter(Adapter):
                 return {"reflectivity": p["reflectivity"], "edge_tint": p["edge_tint"]}
             eta, k = (p["eta"], p["k"]) if p["material"] == "none" else conductor_preset(str(p["material"]))
             r, g = reflectivity_edge_tint(eta, k)
-            return {"reflectivity": tuple(float(x) for x in r), "edge_tint": tuple(float(x) for x in g)}
+            return {"reflectivity": as_rgb(r), "edge_tint": as_rgb(g)}
         if model in ("roughplastic", "ashikhmin_shirley_plastic"):
-            f0 = ((float(p["int_ior"]) - EXT_IOR) / (float(p["int_ior"]) + EXT_IOR)) ** 2  # type: ignore[arg-type]
-            return {"specular_f0": f0}
+            return {"specular_f0": dielectric_f0(float(p["int_ior"]) / EXT_IOR)}  # type: ignore[arg-type]
         if model in ("ward", "phong"):
             s = trim_scale(p["specular_reflectance"], p["diffuse_reflectance"]) \
                 if p["ensure_energy_conservation"] == "true" else 1.0

@@ -6,8 +6,8 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-from brdfremap.core.appearance import (Appearance, conductor_f0, dielectric_f0, eta_k_from_reflectivity, ior_from_f0,
-                                      reflectivity_edge_tint)
+from brdfremap.core.appearance import (Appearance, as_rgb, conductor_f0, dielectric_f0, eta_k_from_reflectivity,
+                                      ior_from_f0, reflectivity_edge_tint)
 from brdfremap.core.schemas import Value
 
 EXT_IOR = 1.000277  # Mitsuba's default exterior medium (air)
@@ -21,12 +21,8 @@ def _mul(a, b) -> tuple[float, float, float]:
 def _conductor(p: dict[str, Value], preset: Callable[[str], EtaK]) -> EtaK:
     if p["material"] == "reflectivity":
         n, k = eta_k_from_reflectivity(p["reflectivity"], p["edge_tint"])
-        return tuple(map(float, n)), tuple(map(float, k))
+        return as_rgb(n), as_rgb(k)
     return (p["eta"], p["k"]) if p["material"] == "none" else preset(str(p["material"]))  # type: ignore[return-value]
-
-
-def _max_rgb(v) -> float:
-    return max(float(x) for x in v)
 
 
 def appearance(model: str, p: dict[str, Value], preset: Callable[[str], EtaK]) -> Appearance | None:
@@ -47,12 +43,12 @@ def appearance(model: str, p: dict[str, Value], preset: Callable[[str], EtaK]) -
     if model in ("ward", "phong"):
         # Ward's α is the slope deviation, as Beckmann's; a Phong exponent n has α = √(2 / (n + 2)).
         alpha = float(p["alpha"]) if model == "ward" else math.sqrt(2.0 / (float(p["exponent"]) + 2.0))  # type: ignore
-        metal = _max_rgb(p["diffuse_reflectance"]) == 0.0
+        metal = max(p["diffuse_reflectance"]) == 0.0  # type: ignore[arg-type]
         return Appearance(kind="conductor" if metal else "dielectric", alpha=alpha, distribution="beckmann",
                           specular=tuple(min(float(x), 1.0) for x in p["specular_reflectance"]),  # type: ignore
                           diffuse=tuple(p["diffuse_reflectance"]))  # type: ignore[arg-type]
     if model == "principled":
-        m, base = float(p["metallic"]), tuple(float(x) for x in p["base_color"])  # type: ignore[union-attr]
+        m, base = float(p["metallic"]), as_rgb(p["base_color"])  # type: ignore[arg-type]
         alpha = max(float(p["roughness"]) ** 2, 1e-4)  # type: ignore[arg-type]
         if m >= 0.5:
             return Appearance(kind="conductor", alpha=alpha, distribution="ggx", specular=base)  # type: ignore
@@ -80,7 +76,7 @@ def from_appearance(model: str, a: Appearance) -> dict[str, Value]:
     elif model == "ashikhmin_shirley":
         eta, k = a.conductor_ior()
         r, g = reflectivity_edge_tint(eta, k)
-        out.update(reflectivity=tuple(map(float, r)), edge_tint=tuple(map(float, g)), eta=eta, k=k)
+        out.update(reflectivity=as_rgb(r), edge_tint=as_rgb(g), eta=eta, k=k)
     elif model in ("roughplastic", "ashikhmin_shirley_plastic"):
         out.update(diffuse_reflectance=a.diffuse, int_ior=a.dielectric_ior() * EXT_IOR)
     elif model == "diffuse":
