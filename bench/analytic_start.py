@@ -7,7 +7,7 @@ the source adapter's neutral reading of the material written into Principled's p
 the Cycles adapter: metallic 1 and F0 for metals, the diffuse colour, metallic 0 and Specular IOR
 Level for plastics, roughness √α), the same with one start, and the fit from Principled's
 defaults (`--start defaults`, the engine before it). Every fit's starts are moved 5 % of each
-range inside the bounds (RemapOptions.start_margin): started on Metallic 1, TRF hardly moves
+range inside the bounds (Tuning.start_margin): started on Metallic 1, TRF hardly moves
 along it. Prints renders, seconds and the error on the evaluation render (128², 64 spp) per
 case and as medians by family, and how many cases each variant made more than 2 % worse than
 the default. One untimed remap first."""
@@ -18,14 +18,13 @@ import statistics
 import time
 
 import speed
-from common import registry
+from common import job_for, open_adapters, registry
 
-from brdfremap.core.remap import RemapOptions
-from brdfremap.core.scene import ProbeScene
-from brdfremap.core.session import open_adapters, prepare, run
+from brdfremap.core.execute import execute
+from brdfremap.core.job import resolve
 
 VARIANTS = {"default (informed, 4 starts)": {}, "informed, 1 start": {"starts": 1},
-            "from the defaults": {"informed_start": False}}
+            "from the defaults": {"start": "defaults"}}
 
 
 def main() -> int:
@@ -33,16 +32,16 @@ def main() -> int:
     srcs = speed.CONDUCTORS + speed.PLASTICS
     res: dict[str, list[tuple[int, float, float]]] = {k: [] for k in VARIANTS}
     with open_adapters(reg, ["mitsuba", "cycles"]) as ads:
-        run(prepare(reg, srcs[0], "warm-up", "cycles", "principled", ProbeScene(), {}, RemapOptions()), reg, ads)
+        execute(resolve(job_for(reg, srcs[0], "cycles", "principled"), reg), ads)
         for src in srcs:
             for label, opts in VARIANTS.items():
-                job = prepare(reg, src, src.name, "cycles", "principled", ProbeScene(), {}, RemapOptions(**opts))
+                job = resolve(job_for(reg, src, "cycles", "principled", **opts), reg)
                 t0 = time.perf_counter()
-                o = run(job, reg, ads)
+                o = execute(job, ads)
                 secs = time.perf_counter() - t0
-                err, _ = speed.evaluate(reg, ads, src, "cycles:principled", o.result.params)
-                res[label].append((o.result.renders, secs, err))
-                print(f"{src.name:28s} {label:30s} {o.result.renders:3d} {secs:5.2f} {err:.2%}", flush=True)
+                err, _ = speed.evaluate(reg, ads, src, "cycles:principled", o.report.params)
+                res[label].append((o.report.renders, secs, err))
+                print(f"{src.name:28s} {label:30s} {o.report.renders:3d} {secs:5.2f} {err:.2%}", flush=True)
     base = res[next(iter(VARIANTS))]
     families = {"all": range(len(srcs)), "metals": range(len(speed.CONDUCTORS)),
                 "plastics": range(len(speed.CONDUCTORS), len(srcs))}

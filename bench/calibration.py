@@ -7,11 +7,10 @@ radiance (interior pixels, where no pixel straddles the silhouette), at 128², 6
 
 from __future__ import annotations
 
-from common import registry
+from common import open_adapters, registry
 
 from brdfremap.core.metrics import relative_rmse
 from brdfremap.core.scene import ProbeScene
-from brdfremap.core.session import open_adapters
 from brdfremap.core.testing import analytic_lambert, sphere_hits
 
 WHITE = {"mitsuba": ("diffuse", {"reflectance": 0.8}), "cycles": ("diffuse", {"color": 0.8})}

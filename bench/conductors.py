@@ -12,11 +12,10 @@ import argparse
 import time
 from pathlib import Path
 
-from common import ROOT, median, registry, remap_once
+from common import ROOT, figures, median, open_adapters, registry, remap_once
 
 from brdfremap.core.atomic import write_text_atomic
 from brdfremap.core.schemas import Material
-from brdfremap.core.session import open_adapters
 
 PRESETS = ("Au", "Ag", "Cu", "Al", "Cr")
 ALPHAS = (0.05, 0.1, 0.2, 0.4)
@@ -42,11 +41,11 @@ def main():
                                params={"distribution": "beckmann", "material": preset, "alpha": alpha})
                 for model, fix in TARGETS:
                     o = remap_once(reg, adapters, src, "cycles", model, fix=fix)
-                    r = o.result
+                    r = figures(o.report)
                     target = model + (f" {fix[0].split('=')[1]}" if fix else "")
                     verdict = "reliable" if r.reliable else r.reason.split(";")[0].split(" although")[0]
                     row = (f"| {preset} β α={alpha:g} | {target} | {r.relative_rmse:.2%} | {r.perceptual:.2f} | "
-                           f"{o.noise_floor:.2%} | {r.renders} | {r.seconds:.1f} | {r.params['roughness'] ** 2:.4f} | "
+                           f"{o.report.metrics.noise_floor:.2%} | {r.renders} | {r.seconds:.1f} | {r.params['roughness'] ** 2:.4f} | "
                            f"{verdict} |")
                     print(row, flush=True)
                     rows.append((target, r, row))

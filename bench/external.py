@@ -11,9 +11,8 @@ adapter's informed start would make the pair differ in more than how the rendere
 
 from __future__ import annotations
 
-from common import registry, remap_once
+from common import figures, open_adapters, registry, remap_once
 
-from brdfremap.core.session import open_adapters
 
 PAIRS = [
     ("configs/materials/copper.yaml", ("mitsuba", "mitsuba-cli"), "roughconductor", ("distribution=ggx",)),
@@ -38,8 +37,8 @@ def main():
         for src, targets, model, fix in PAIRS:
             fitted = []
             for target in targets:
-                o = remap_once(reg, adapters, src, target, model, fix=fix, informed_start=False)
-                r = o.result
+                o = remap_once(reg, adapters, src, target, model, fix=fix, start="defaults")
+                r = figures(o.report)
                 names = [n for n in r.fitted]
                 fitted.append(_numbers(r.params, names))
                 shown = " ".join(f"{n}={r.params[n] if isinstance(r.params[n], str) else r.params[n]!r}"[:40]

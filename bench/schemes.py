@@ -8,9 +8,8 @@ from __future__ import annotations
 
 import argparse
 
-from common import median, registry, remap_once
+from common import figures, median, open_adapters, registry, remap_once
 
-from brdfremap.core.session import open_adapters
 
 CASES = [
     ("configs/materials/blue-plastic.yaml", "mitsuba", "roughplastic", ()),
@@ -32,10 +31,10 @@ def main():
             for scheme in ("one", "two", "three"):
                 runs = [remap_once(reg, adapters, src, adapter, model, fix=fix, scheme=scheme)
                         for _ in range(args.repeat)]
-                r = runs[0].result
+                r = figures(runs[0].report)
                 target = f"{model}" + (f" {' '.join(fix)}" if fix else "")
                 print(f"{src.split('/')[-1]:<22} {target:<30} {scheme:<6} {r.relative_rmse:9.2%} {r.perceptual:7.2f} "
-                      f"{r.renders:7d} {median([o.result.seconds for o in runs]):7.2f}  "
+                      f"{r.renders:7d} {median([o.report.seconds for o in runs]):7.2f}  "
                       f"{'reliable' if r.reliable else 'UNRELIABLE: ' + r.reason[:60]}")
 
 

@@ -30,13 +30,12 @@ import time
 from pathlib import Path
 
 import baselines
-from common import ROOT, median, registry, remap_once
+from common import ROOT, median, open_adapters, registry, remap_once
 
 from brdfremap.core.atomic import write_json_atomic, write_text_atomic
 from brdfremap.core.metrics import delta_e_itp, relative_rmse
 from brdfremap.core.scene import ProbeScene
 from brdfremap.core.schemas import Material, parse_fix
-from brdfremap.core.session import open_adapters
 
 EVAL = ProbeScene(resolution=128, spp=64, seed=7)
 DEFAULT = ProbeScene()
@@ -82,7 +81,7 @@ PAPER_SAMPLE = {(f"{m} β α={a:g}", t) for m, a, t in (
     ("Ag", 0.05, "cycles:principled"), ("Al", 0.4, "cycles:principled"),
     ("Au", 0.1, "cycles:glossy:beckmann"), ("Cr", 0.4, "cycles:glossy:beckmann"))} | \
     {(PLASTICS[i].name, "cycles:principled") for i in (1, 3)}
-VARIANTS = {"default, starts from the defaults": dict(informed_start=False),
+VARIANTS = {"default, starts from the defaults": dict(start="defaults"),
             "default, no polish at more samples": dict(precise_spp=1),
             "default, unscaled starts": dict(linear_starts=False),
             "default, no Jacobian updates": dict(jacobian_updates=0),
@@ -91,7 +90,7 @@ VARIANTS = {"default, starts from the defaults": dict(informed_start=False),
             "default, polish holds nothing": dict(hold_settled=False),
             "default, one joint round, 0.5-point trigger": dict(joint_rounds=1, joint_min_gain=0.005)}
 CACHED = ("paper", "floor")
-OLD_ENGINE = {"informed_start": False, "start_margin": 0.0}
+OLD_ENGINE = {"start": "defaults", "start_margin": 0.0}
 """The paper's and the floor's fits start from the target's defaults as given (on a bound, if
 that is where a default lies), as they did when their rows were first cached."""
 CACHE_NOTE = (" Paper and floor rows come from the script's cache when it has them (a run of it with the same"
@@ -133,13 +132,13 @@ def run_case(reg, adapters, src, target, *, paper=True, variants=True, cache: Pa
         t0 = time.perf_counter()
         o = remap_once(reg, adapters, src, adapter, model, fix=fix, scene=scene, **options)
         secs = time.perf_counter() - t0
-        err, de = evaluate(reg, adapters, src, target, o.result.params)
-        rows[label] = dict(renders=o.result.renders, seconds=secs, err=err, de=de, reliable=o.result.reliable)
+        err, de = evaluate(reg, adapters, src, target, o.report.params)
+        rows[label] = dict(renders=o.report.renders, seconds=secs, err=err, de=de, reliable=o.report.reliable)
         if path is not None:
             write_json_atomic(path, {"key": json.loads(key), "row": rows[label]})
 
     if paper:
-        fitted("paper", PAPER, scheme="one", starts=1, coarse_resolution=None, jacobian_updates=0,
+        fitted("paper", PAPER, scheme="one", starts=1, coarse=0, jacobian_updates=0,
                linear_starts=False, **OLD_ENGINE)
     for conv in ("identity", "squared") if methods is None or "analytic" in methods else ():
         p = baselines.convert(src.model, src.params, target, conv)
@@ -148,7 +147,7 @@ def run_case(reg, adapters, src, target, *, paper=True, variants=True, cache: Pa
             p = {**{k: v for k, v in spec.complete({}).items()}, **dict(parse_fix(f, spec) for f in fix), **p}
             err, de = evaluate(reg, adapters, src, target, p)
             rows[f"analytic {conv}"] = dict(renders=0, seconds=0.0, err=err, de=de, reliable=None)
-    fitted("floor", FLOOR, scheme="one", starts=8, coarse_resolution=None, max_renders_per_stage=160,
+    fitted("floor", FLOOR, scheme="one", starts=8, coarse=0, max_renders_per_stage=160,
            jacobian_updates=0, **OLD_ENGINE)
     fitted("default", DEFAULT)
     if variants:

@@ -11,12 +11,11 @@ from __future__ import annotations
 import argparse
 import time
 
-from common import ROOT, median, registry
+from common import ROOT, job_for, median, open_adapters, registry
 
-from brdfremap.core.remap import RemapOptions
-from brdfremap.core.scene import ProbeScene
+from brdfremap.core.execute import execute
+from brdfremap.core.job import resolve
 from brdfremap.core.schemas import load_material
-from brdfremap.core.session import open_adapters, prepare, run
 
 MATERIALS = ("gold", "copper", "blue-plastic")
 
@@ -35,7 +34,7 @@ def main() -> None:
         for n in (1, 2):  # warm-up, untimed: Blender's first renders of a material compile its shaders
             cycles.n_workers, cycles._extra = n, (extra if n == 2 else [])
             src = load_material(ROOT / "configs/materials" / "gold.yaml")
-            run(prepare(reg, src, "gold", "cycles", "principled", ProbeScene(), {}, RemapOptions()), reg, adapters)
+            execute(resolve(job_for(reg, src, "cycles", "principled"), reg), adapters)
         print(f"{'material':14s} {'workers':>7s} {'seconds':>8s} {'renders':>8s} {'error':>8s}")
         for _ in range(args.reps):
             for name in MATERIALS:
@@ -43,13 +42,13 @@ def main() -> None:
                 for n in (1, 2):
                     cycles.n_workers, cycles._extra = n, (extra if n == 2 else [])
                     src = load_material(ROOT / "configs/materials" / f"{name}.yaml")
-                    job = prepare(reg, src, name, "cycles", "principled", ProbeScene(), {}, RemapOptions())
+                    job = resolve(job_for(reg, src, "cycles", "principled"), reg)
                     t0 = time.perf_counter()
-                    o = run(job, reg, adapters)
+                    o = execute(job, adapters)
                     dt = time.perf_counter() - t0
                     secs[n].append(dt)
-                    results[n] = (o.result.params, o.result.renders)
-                    print(f"{name:14s} {n:7d} {dt:8.2f} {o.result.renders:8d} {o.result.relative_rmse:8.2%}", flush=True)
+                    results[n] = (o.report.params, o.report.renders)
+                    print(f"{name:14s} {n:7d} {dt:8.2f} {o.report.renders:8d} {o.report.metrics.relative_rmse:8.2%}", flush=True)
                 assert results[1] == results[2], f"{name}: one and two workers disagree"
         cycles._extra = extra
     m1, m2 = median(secs[1]), median(secs[2])

@@ -26,3 +26,11 @@ def brdfremap_adapter_from_file(path):
 
     Return ``(name, factory)`` if this plugin understands the file, else None. Raise
     ``ConfigError`` naming the file and field when it is yours but invalid."""
+
+
+@hookspec
+def brdfremap_register_schemas(register):
+    """Register the file formats this plugin reads, for `remap schema NAME`.
+
+    Call ``register(name, model)`` with a pydantic model class per format (e.g. ``renderer``
+    for a renderer definition file). The host rejects a name registered twice."""

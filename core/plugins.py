@@ -21,10 +21,17 @@ class AdapterEntry:
     name: str
     factory: Any
     plugin: str
+    source_file: Path | None = None
+    """The definition file it was loaded from on the command line, if any."""
 
     @property
     def models(self) -> dict:
         return getattr(self.factory, "models", {})
+
+    @property
+    def version(self) -> str:
+        """The adapter's own version (part of a job's key): bumped when its renders change."""
+        return str(getattr(self.factory, "version", "1"))
 
     def unavailable_reason(self) -> str | None:
         try:
@@ -39,18 +46,17 @@ class AdapterRegistry:
     broken: dict[str, str] = field(default_factory=dict)
     pm: Any = None
 
-    def resolve(self, name: str, *, file: str | None = None, field_name: str = "--adapter") -> str:
+    def resolve(self, name: str, *, field_name: str = "--adapter") -> str:
         """An adapter name, or a definition file (``renderer.yaml``) loaded now through the
-        ``brdfremap_adapter_from_file`` hook. Returns the adapter's name."""
+        ``brdfremap_adapter_from_file`` hook. Returns the adapter's name. Only for what the user
+        types on the command line: a data file names adapters, it never points at a program."""
         if name in self.entries:
             return name
         path = Path(name)
-        if file and not path.is_absolute():
-            path = Path(file).parent / path
         if path.suffix not in (".yaml", ".yml") and os.sep not in name:
-            return self.get(name, file=file, field_name=field_name).name
+            return self.get(name, field_name=field_name).name
         if not path.is_file():
-            raise ConfigError("adapter file not found (check the path)", file=str(path), field=field_name if not file else "adapter")
+            raise ConfigError("adapter file not found (check the path)", file=str(path), field=field_name)
         got = self.pm.hook.brdfremap_adapter_from_file(path=str(path)) if self.pm else None
         if got is None:
             raise ConfigError("no installed plugin understands this adapter file", file=str(path))
@@ -62,17 +68,25 @@ class AdapterRegistry:
                 return adapter_name
             raise ConfigError(f"adapter name {adapter_name!r} is already taken by {existing.plugin}",
                               file=str(path), field="name")
-        self.entries[adapter_name] = AdapterEntry(adapter_name, factory, f"file {path}")
+        self.entries[adapter_name] = AdapterEntry(adapter_name, factory, f"file {path}", path.resolve())
         return adapter_name
 
     def names(self) -> list[str]:
         return sorted(self.entries)
 
+    def loaded_files(self) -> list[str]:
+        """Definition files loaded through `resolve` (a worker process loads them again)."""
+        return [str(e.source_file) for e in self.entries.values() if e.source_file is not None]
+
     def get(self, name: str, *, file: str | None = None, field_name: str = "--adapter") -> AdapterEntry:
         if name not in self.entries:
+            if file and (name.endswith((".yaml", ".yml")) or os.sep in name):
+                raise ConfigError(f"{name!r} is a file: a data file names an installed adapter (see `remap "
+                                  "adapters`); a renderer definition is given on the command line (--adapter "
+                                  "FILE) or put in a renderer folder", file=file, field=field_name)
             known = ", ".join(self.names()) or "none"
             raise ConfigError(f"unknown adapter {name!r} (installed: {known}; see `remap adapters`)",
-                              file=file, field="adapter" if file else field_name)
+                              file=file, field=field_name)
         return self.entries[name]
 
     def create(self, name: str):
@@ -144,3 +158,25 @@ def collect_adapters(pm: PluginManager | None = None) -> AdapterRegistry:
         except Exception as exc:
             registry.broken[label] = f"{type(exc).__name__}: {exc}"
     return registry
+
+
+def collect_schemas(pm: PluginManager | None = None) -> dict[str, Any]:
+    """File formats by name: the core's own and those plugins register (`remap schema NAME`)."""
+    from .experiments.spec import Experiment
+    from .job import Job
+    from .report import Report
+    from .scene import ProbeScene
+    from .schemas import Material
+    from .settings import Settings
+
+    out: dict[str, Any] = {"report": Report, "material": Material, "scene": ProbeScene, "experiment": Experiment,
+                           "job": Job, "settings": Settings}
+    pm = pm or get_plugin_manager()
+
+    def register(name: str, model: Any) -> None:
+        if name in out:
+            raise ConfigError(f"file format {name!r} is registered twice")
+        out[name] = model
+
+    pm.hook.brdfremap_register_schemas(register=register)
+    return out

@@ -22,6 +22,9 @@ class Adapter(abc.ABC):
     """
 
     name: ClassVar[str]
+    version: ClassVar[str] = "1"
+    """This adapter's own version: bump it when a change would change its renders (it is part of
+    every job's key, so stored results made with the old renders are redone)."""
     summary: ClassVar[str] = ""
     install_hint: ClassVar[str] = ""
     models: ClassVar[dict[str, ModelSpec]] = {}

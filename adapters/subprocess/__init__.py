@@ -32,3 +32,10 @@ def brdfremap_adapter_from_file(path):
 
     cls = adapter_class(path)
     return cls.name, cls
+
+
+@hookimpl
+def brdfremap_register_schemas(register):
+    from .definition import RendererDef
+
+    register("renderer", RendererDef)

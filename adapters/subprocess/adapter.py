@@ -6,6 +6,7 @@ reads the image it wrote. A persistent renderer is started once and answers JSON
 
 from __future__ import annotations
 
+import hashlib
 import importlib.util
 import json
 import os
@@ -219,9 +220,21 @@ def adapter_class(path: str | Path) -> type[SubprocessAdapter]:
     d = load_definition(path)
     return type(f"External_{d.name}", (SubprocessAdapter,), {
         "name": d.name, "definition": d, "source_file": path, "models": d.model_specs(),
+        "version": _version(path, d),
         "summary": d.description or f"external renderer ({d.mode}) from {path}",
         "install_hint": f"see {path}",
     })
+
+
+def _version(path: Path, d: RendererDef) -> str:
+    """The definition's own content (and its scene template's): a job's key changes with them."""
+    h = hashlib.sha256(path.read_bytes())
+    if d.scene_template:
+        try:
+            h.update((path.parent / d.scene_template).read_bytes())
+        except OSError:
+            pass  # reported when the adapter is constructed
+    return h.hexdigest()[:12]
 
 
 def search_dirs() -> list[Path]:

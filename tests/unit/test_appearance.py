@@ -15,10 +15,11 @@ from brdfremap.core import hookimpl
 from brdfremap.core.appearance import (Appearance, conductor_f0, dielectric_f0, eta_k_from_reflectivity, ior_from_f0,
                                        reflectivity_edge_tint)
 from brdfremap.core.plugins import collect_adapters, get_plugin_manager
-from brdfremap.core.remap import RemapOptions
 from brdfremap.core.scene import ProbeScene
 from brdfremap.core.schemas import Material
-from brdfremap.core.session import informed_start, open_adapters, prepare, result_document, run
+from brdfremap.core.execute import AdapterPool, execute, informed_start
+from brdfremap.core.job import Job, Target, resolve
+from brdfremap.core.settings import Settings
 from brdfremap_example.adapter import ToyAdapter
 
 GOLD = ((0.143, 0.374, 1.442), (3.983, 2.385, 1.603))  # Mitsuba's Au preset in RGB, near enough
@@ -90,13 +91,19 @@ def _toy_registry():
     return collect_adapters(get_plugin_manager(load_entrypoints=False, plugins=(mod,)))
 
 
+def _job(reg, src, scene, fix=None, **settings):
+    job = Job(source=src, target=Target(adapter="toy", model="toy", fix=fix or {}), scene=scene,
+              settings=Settings(**settings), label="src.yaml")
+    return resolve(job, reg)
+
+
 def test_the_session_starts_from_the_conversion_of_free_parameters_only_within_bounds():
     reg = _toy_registry()
     src = Material(adapter="toy", model="toy", params={"diffuse": [0.6, 0.3, 0.1], "specular": 0.8, "alpha": 0.15})
     scene = ProbeScene(resolution=48)
-    opts = RemapOptions(scheme="one", coarse_resolution=None)
-    job = prepare(reg, src, "src.yaml", "toy", "toy", scene, {"specular": 0.5}, opts)
-    with open_adapters(reg, ["toy"]) as ads:
+    job = _job(reg, src, scene, {"specular": 0.5}, scheme="one", coarse=0)
+    ads = AdapterPool(reg)
+    if True:
         start = informed_start(job, ads)
         assert start == {"diffuse": (0.6, 0.3, 0.1), "alpha": 0.15}  # specular is fixed: not touched
         ads["toy"].from_appearance = lambda m, a, b: {"diffuse": (1.7, -0.2, 0.5), "alpha": 9.0, "unused": 0.3}
@@ -110,16 +117,14 @@ def test_an_informed_start_saves_renders_and_is_reported(tmp_path):
     src = Material(adapter="toy", model="toy", params={"diffuse": [0.6, 0.3, 0.1], "specular": 0.8, "alpha": 0.15})
     scene = ProbeScene(resolution=48)
     out = {}
-    with open_adapters(reg, ["toy"]) as ads:
-        for informed in (True, False):
-            job = prepare(reg, src, "src.yaml", "toy", "toy", scene, {},
-                          RemapOptions(scheme="one", coarse_resolution=None, informed_start=informed))
-            out[informed] = run(job, reg, ads)
-    assert out[True].result.renders < out[False].result.renders
-    assert out[True].result.relative_rmse < 1e-3
-    doc = result_document(out[True])
+    ads = AdapterPool(reg)
+    for start in ("informed", "defaults"):
+        out[start] = execute(_job(reg, src, scene, scheme="one", coarse=0, start=start), ads).report
+    assert out["informed"].renders < out["defaults"].renders
+    assert out["informed"].metrics.relative_rmse < 1e-3
+    doc = out["informed"].document()
     assert doc["start"] == {"informed": True, "params": {"diffuse": [0.6, 0.3, 0.1], "specular": 0.8, "alpha": 0.15}}
-    assert result_document(out[False])["start"] == {"informed": False, "params": {}}
+    assert out["defaults"].document()["start"] == {"informed": False, "params": {}}
 
 
 class _NoisyToy(ToyAdapter):
@@ -147,13 +152,14 @@ def test_a_noise_limited_fit_is_polished_at_more_samples():
     src = Material(adapter="toy", model="toy", params=truth)
     scene = ProbeScene(resolution=48, spp=16)
     out = {}
-    with open_adapters(reg, ["toy"]) as ads:
-        for factor in (1, 4):
-            job = prepare(reg, src, "src.yaml", "toy", "toy", scene, {},
-                          RemapOptions(scheme="one", coarse_resolution=None, informed_start=False, precise_spp=factor))
-            out[factor] = run(job, reg, ads).result
+    ads = AdapterPool(reg)
+    for factor in (1, 4):
+        job = _job(reg, src, scene, scheme="one", coarse=0, start="defaults", precise_spp=factor)
+        out[factor] = execute(job, ads).report
     assert [s.name for s in out[4].stages][-1] == "precise@64spp"
-    assert any(n.startswith("noise-limited") for n in out[4].notes)
-    assert not any(n.startswith("noise-limited") for n in out[1].notes)
+    assert any(f.kind == "noise_polished" for f in out[4].findings)
+    assert not any(f.kind == "noise_polished" for f in out[1].findings)
+    # The verdict is taken after the polish, on the parameters it left.
+    assert out[4].metrics.relative_rmse <= out[4].metrics.threshold and out[4].verdict == "ok"
     off = {f: abs(out[f].params["alpha"] / truth["alpha"] - 1) for f in out}
     assert off[4] < off[1]

@@ -54,7 +54,7 @@ params: {distribution: beckmann, material: Au, alpha: 0.1}
         (GOOD, ["--fix", "alpha=7"], "--fix alpha: 7 is outside the bounds"),
         (GOOD, ["--fix", "distribution=phong"], "--fix distribution: 'phong' is not one of"),
         (GOOD, ["--resolution", "2"], "--resolution: Input should be greater than or equal to 8"),
-        (GOOD, ["--precise-spp", "0"], "--precise-spp: must be at least 1"),
+        (GOOD, ["--precise-spp", "0"], "--precise-spp: Input should be greater than or equal to 1"),
         ("adapter: mitsuba\nmodel: roughconductor\nparams: {alpha: 3.0}\n", [], "m.yaml: params.alpha: 3 is outside"),
         ("adapter: mitsuba\nmodel: roughconductor\nparams: {roughness: 0.3}\n", [], "m.yaml: params.roughness: unknown parameter"),
         ("adapter: mitsuba\nmodel: glass\n", [], "m.yaml: model: adapter 'mitsuba' has no model 'glass'"),

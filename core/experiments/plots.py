@@ -8,10 +8,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .atomic import temp_beside
+from ..atomic import temp_beside
+from .analysis import channels, quantity
+from .spec import label
 
 if TYPE_CHECKING:
-    from .experiments import Experiment, Row
+    from .analysis import Row
+    from .spec import Experiment
 
 
 def _plt():
@@ -41,8 +44,6 @@ def _name(q: str) -> str:
 
 
 def _points(exp: "Experiment", rows: list["Row"], xq: str, yq: str):
-    from .experiments import channels, quantity
-
     out = []  # (group label, x, y, flagged, cliff, channel, mismatch)
     for r in rows:
         xs = channels(quantity(r, xq), exp.plot.channels)
@@ -54,10 +55,8 @@ def _points(exp: "Experiment", rows: list["Row"], xq: str, yq: str):
     return out
 
 
-def _group_label(exp: "Experiment", g: Any) -> str:
-    from .experiments import _label
-
-    return f"{exp.groups.param} = {_label(g)}" if exp.groups else exp.source.model
+def _grouplabel(exp: "Experiment", g: Any) -> str:
+    return f"{exp.groups.param} = {label(g)}" if exp.groups else exp.source.model
 
 
 def sweep_plot(base: Path, exp: "Experiment", rows: list["Row"]) -> Path:
@@ -75,7 +74,7 @@ def sweep_plot(base: Path, exp: "Experiment", rows: list["Row"]) -> Path:
             series = sorted((p for p in mine if p[5] == ch), key=lambda p: p[1])
             x = [p[1] for p in series]
             y = [p[2] for p in series]
-            label = _group_label(exp, g) if ch in (None, 0) else None
+            label = _grouplabel(exp, g) if ch in (None, 0) else None
             ax.plot(x, y, "-", color=color, lw=0.8, alpha=0.6)
             ax.plot(x, y, markers[ch], color=color, ms=3.5, label=label, ls="none")
     mm = [p for p in pts if p[6]]
@@ -135,8 +134,6 @@ def roundtrip_plot(base: Path, exp: "Experiment", rows: list["Row"], fit: dict[s
 
 def cliff_figure(path: Path, exp: "Experiment", before: "Row", after: "Row", out: Path) -> Path:
     """The paper's Fig. 8: source, remapped target and error map on both sides of a cliff."""
-    from .experiments import _label
-
     plt = _plt()
     fig, axes = plt.subplots(2, 3, figsize=(6.3, 4.5))
     for row_axes, r in zip(axes, (before, after)):
@@ -149,7 +146,7 @@ def cliff_figure(path: Path, exp: "Experiment", before: "Row", after: "Row", out
             ax.set_yticks([])
             ax.grid(False)
             ax.set_title(title, fontsize=8)
-        row_axes[0].set_ylabel(f"{exp.sweep.param} = {_label(r.point.value)}", fontsize=8)
+        row_axes[0].set_ylabel(f"{exp.sweep.param} = {label(r.point.value)}", fontsize=8)
     fig.suptitle(f"{exp.name}: both sides of a cliff", fontsize=9)
     saved = _save(fig, path.with_suffix(""), svg=False)
     plt.close(fig)

@@ -1,0 +1,52 @@
+"""The `remap` command. Bad input prints one line naming the file and field, and exits 2.
+
+Each command lives in its own module (`remap_cmd`, `experiment_cmd`, `tools`); this one only
+dispatches and turns the errors a user should read into one line."""
+
+from __future__ import annotations
+
+import os
+import sys
+
+from .. import interrupt
+from ..errors import RemapError
+
+EXIT_USAGE = 2
+
+
+def _dispatch(argv: list[str]) -> int:
+    from . import experiment_cmd, remap_cmd, tools
+
+    head, rest = (argv[0], argv[1:]) if argv else ("", [])
+    if head == "adapters":
+        return tools.adapters(tools.adapters_parser().parse_args(rest))
+    if head == "schema":
+        return tools.schema(tools.schema_parser().parse_args(rest))
+    if head == "render":
+        return tools.render(tools.render_parser().parse_args(rest))
+    if head in ("sweep", "roundtrip"):
+        return experiment_cmd.run(head, experiment_cmd.parser(head).parse_args(rest))
+    return remap_cmd.run(remap_cmd.parser().parse_args(argv))
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv
+    interrupt.install()
+    try:
+        return _dispatch(argv)
+    except RemapError as exc:
+        if debug:
+            raise
+        print(f"remap: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("remap: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:  # `remap ... | head`: the reader left; results are already written
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,77 @@
+"""Flags shared by the commands, built from the models they fill: `Settings` (how a fit runs),
+the scene overrides, and where jobs run. Defaults are read from the models, never restated."""
+
+from __future__ import annotations
+
+import argparse
+import typing
+
+from pydantic import ValidationError
+
+from ..configio import validation_message
+from ..errors import ConfigError
+from ..scene import ProbeScene, load_scene
+from ..settings import DEFAULTS, Settings
+
+_METAVARS = {"starts": "N", "coarse": "N", "precise_spp": "K", "threshold": "FRACTION", "jacobian_updates": "N"}
+
+
+def flag(field: str) -> str:
+    return "--" + field.replace("_", "-")
+
+
+def add_settings(p: argparse.ArgumentParser) -> None:
+    """One flag per `Settings` field, its help the field's description and its default shown."""
+    g = p.add_argument_group("how the fit runs")
+    for name, info in Settings.model_fields.items():
+        kw: dict = {"dest": f"settings_{name}", "default": None,
+                    "help": f"{info.description.rstrip('.')} (default {getattr(DEFAULTS, name)})"}
+        choices = typing.get_args(info.annotation)
+        if choices and all(isinstance(c, str) for c in choices):
+            kw["choices"] = choices
+        else:
+            kw.update(type=type(info.default), metavar=_METAVARS.get(name, "X"))
+        g.add_argument(flag(name), **kw)
+
+
+def settings_from(args: argparse.Namespace) -> Settings:
+    given = {name: getattr(args, f"settings_{name}") for name in Settings.model_fields
+             if getattr(args, f"settings_{name}", None) is not None}
+    try:
+        return Settings(**given)
+    except ValidationError as exc:
+        field, msg = validation_message(exc)
+        raise ConfigError(msg, field=flag(field)) from None
+
+
+def add_scene(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--scene", metavar="SCENE.yaml", help="probe scene (default: the built-in probe, identical to "
+                                                         "configs/scenes/default.yaml)")
+    p.add_argument("--resolution", type=int, metavar="N", help="override the scene's resolution (pixels)")
+    p.add_argument("--spp", type=int, metavar="N", help="override the scene's samples per pixel")
+    p.add_argument("--seed", type=int, metavar="N", help="override the scene's sampler seed")
+
+
+def scene_from(args: argparse.Namespace) -> ProbeScene:
+    scene = load_scene(args.scene) if args.scene else ProbeScene()
+    overrides = {k: v for k, v in (("resolution", args.resolution), ("spp", args.spp), ("seed", args.seed))
+                 if v is not None}
+    try:
+        return ProbeScene.model_validate({**scene.model_dump(), **overrides})
+    except ValidationError as exc:
+        field, msg = validation_message(exc)
+        raise ConfigError(msg, field=f"--{field}") from None
+
+
+def add_workers(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("where the jobs run")
+    g.add_argument("--jobs", type=int, default=1, metavar="N",
+                   help="run N jobs at once in local worker processes (default 1: in this process)")
+    g.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run the jobs on a Dask distributed cluster (e.g. tcp://host:8786); every worker needs "
+                        "brdf-remap and the renderers installed")
+
+
+def add_common(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.add_argument("--debug", action="store_true", help="show tracebacks")

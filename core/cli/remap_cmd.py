@@ -1,0 +1,112 @@
+"""`remap --adapter A --model M --source MATERIAL.yaml --out DIR`: one material, one result."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import TYPE_CHECKING
+
+from ..errors import ConfigError
+from ..schemas import format_value
+from . import options
+
+if TYPE_CHECKING:
+    from ..report import Report
+
+USAGE_EPILOG = """\
+other commands:
+  remap adapters                          list adapters, their models, and why one is unavailable
+  remap render MATERIAL.yaml --out IMAGE.exr   render one material on the probe, no fit
+  remap sweep EXPERIMENT.yaml --out DIR   remap a family of source materials; CSV, plots, cliffs
+  remap roundtrip EXPERIMENT.yaml --out DIR   remap there and back; recovered vs original
+  remap schema [report|material|scene|experiment|...]   the JSON Schema of a file format
+
+examples:
+  remap --adapter mitsuba --model roughconductor --fix distribution=ggx \\
+        --source configs/materials/gold.yaml --out out/gold-ggx
+"""
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="remap",
+        description="Remap a material to another renderer's BRDF model by matching rendered images "
+        "(Sztrajman et al., MAM 2017).",
+        epilog=USAGE_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("--adapter", required=True, help="target adapter (see `remap adapters`), or a renderer "
+                                                    "definition file (renderer.yaml)")
+    p.add_argument("--model", required=True, help="target material model of that adapter")
+    p.add_argument("--source", required=True, metavar="MATERIAL.yaml", help="source material file")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    options.add_scene(p)
+    p.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE",
+                   help="hold a target parameter at a value (repeatable), e.g. --fix distribution=ggx")
+    p.add_argument("--force", action="store_true", help="fit again even if DIR holds the result of this same job")
+    options.add_settings(p)
+    options.add_common(p)
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..executors import workers
+    from ..job import Job, Target, Where, model_of, resolve
+    from ..plugins import collect_adapters
+    from ..runner import Runner, Task
+    from ..schemas import load_material, parse_fix
+    from ..store import Store, owned
+    from .progress import RenderProgress
+
+    source = load_material(args.source)
+    scene = options.scene_from(args)
+    settings = options.settings_from(args)
+    registry = collect_adapters()
+    adapter = registry.resolve(args.adapter)
+    spec = model_of(registry, adapter, args.model, None, "--")
+    fixed: dict = {}
+    for text in args.fix:
+        name, value = parse_fix(text, spec)
+        if name in fixed:
+            raise ConfigError("given twice: keep one", field=f"--fix {name}")
+        fixed[name] = value
+    job = Job(source=source, target=Target(adapter=adapter, model=args.model, fix=fixed), scene=scene,
+              settings=settings, label=str(args.source))
+    resolved = resolve(job, registry, Where(source_file=str(args.source)))
+    if not args.quiet:
+        print(f"remap {source.adapter}:{source.model} -> {adapter}:{args.model}  ({scene.resolution}x"
+              f"{scene.resolution}, {scene.spp} spp, scheme {settings.scheme}; fitting "
+              f"{', '.join(resolved.free) or 'nothing'})", file=sys.stderr, flush=True)
+    with owned(args.out) as folder, workers() as w:
+        runner = Runner(Store(folder), w, renderer_files=tuple(registry.loaded_files()), quiet=True,
+                        render_progress=RenderProgress(not args.quiet), reuse=not args.force)
+        (done,) = runner.run([Task("", resolved.job, str(args.source))])
+    _print(done.report, folder, resumed=done.resumed)
+    return 0
+
+
+def _params(params: dict, names: list[str] | None = None) -> str:
+    return " ".join(f"{k}={format_value(tuple(v) if isinstance(v, list) else v)}" for k, v in params.items()
+                    if names is None or k in names)
+
+
+def _print(r: "Report", folder, resumed: bool) -> None:
+    m = r.metrics
+    verdict = {"ok": "ok", "mismatch": "MISMATCH", "unreliable": "UNRELIABLE"}[r.verdict]
+    rows = [
+        ("params", _params(r.params)),
+        ("relative RMSE", f"{m.relative_rmse:.2%}   (noise floor {m.noise_floor:.2%})"),
+        ("perceptual", f"{m.perceptual:.2f} mean ΔE_ITP"),
+        ("start", "the exporters' conversion: " + _params(r.start.params) if r.start.informed
+                  else "the target's defaults"),
+        ("renders", f"{r.renders} target ({', '.join(f'{v} at {k}' for k, v in r.renders_by_resolution.items())})"
+                    f" + {r.source_renders} source"),
+        ("seconds", f"{r.seconds:.2f}" + ("   (the stored result of this same job: --force to fit again)"
+                                          if resumed else "")),
+        ("scheme", r.scheme if r.scheme == r.scheme_used else f"{r.scheme} (used {r.scheme_used})"),
+        ("verdict", verdict + ("" if r.reliable else f": {r.reason}")),
+        ("wrote", f"{folder}/ ({', '.join([f.name for f in r.files] + ['result.json'])})"),
+    ]
+    width = max(len(k) for k, _ in rows)
+    for k, v in rows:
+        print(f"{k:<{width}}  {v}")

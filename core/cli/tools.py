@@ -1,0 +1,125 @@
+"""`remap adapters`, `remap schema`, `remap render`: look at what is installed, at the file
+formats, and at one material."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+from ..errors import ConfigError
+from . import options
+
+
+def adapters_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="remap adapters", description="List adapters and their models.")
+    p.add_argument("--debug", action="store_true", help="show tracebacks")
+    return p
+
+
+def adapters(args: argparse.Namespace) -> int:
+    from ..plugins import collect_adapters
+
+    registry = collect_adapters()
+    for name in registry.names():
+        entry = registry.get(name)
+        reason = entry.unavailable_reason()
+        print(f"{name}  [{entry.plugin}]  {getattr(entry.factory, 'summary', '')}")
+        if reason:
+            hint = getattr(entry.factory, "install_hint", "")
+            print(f"  unavailable: {reason}" + (f"\n  install: {hint}" if hint else ""))
+        else:
+            try:
+                env = entry.factory.environment()
+            except Exception as exc:  # a broken plugin is listed with its error, not fatal
+                env = {"environment": f"unknown ({exc})"}
+            for k, v in env.items():
+                print(f"  {k}: {v}")
+        for mname, spec in sorted(entry.models.items()):
+            params = ", ".join(p.name for p in spec.parameters)
+            lobes = "lobes" if spec.has_lobes else "no lobe isolation"
+            print(f"  model {mname}: {params}  ({lobes})")
+    for plugin, err in sorted(registry.broken.items()):
+        print(f"broken plugin {plugin}: {err}")
+    return 0
+
+
+def schema_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="remap schema", description="Print the JSON Schema of one of the file formats "
+                                "(result.json by default), to validate what you read or write.")
+    p.add_argument("name", nargs="?", default="report", help="report (result.json), material, scene, experiment, "
+                                                             "job, settings, or one a plugin adds (renderer)")
+    p.add_argument("--debug", action="store_true", help="show tracebacks")
+    return p
+
+
+def schema(args: argparse.Namespace) -> int:
+    from ..plugins import collect_schemas
+
+    known = collect_schemas()
+    if args.name not in known:
+        raise ConfigError(f"unknown file format {args.name!r} (known: {', '.join(sorted(known))})", field="NAME")
+    mode = "serialization" if args.name == "report" else "validation"
+    doc = known[args.name].model_json_schema(mode=mode)
+    doc = {"$schema": "https://json-schema.org/draft/2020-12/schema", **doc}
+    print(json.dumps(doc, indent=2, ensure_ascii=False))
+    return 0
+
+
+def render_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="remap render", description="Render one material on the probe scene, without "
+                                "fitting anything: a linear float EXR (or an sRGB PNG preview for a .png name).")
+    p.add_argument("material", metavar="MATERIAL.yaml", help="material file (adapter, model, params)")
+    p.add_argument("--out", required=True, metavar="IMAGE.exr", help="image to write (.exr, or .png for a preview)")
+    options.add_scene(p)
+    p.add_argument("--lobe", choices=("diffuse", "specular"), help="render one lobe alone")
+    options.add_common(p)
+    return p
+
+
+def render(args: argparse.Namespace) -> int:
+    from ..imageio import preview, write_exr, write_png
+    from ..job import model_of
+    from ..metrics import exposure
+    from ..plugins import collect_adapters
+    from ..protocol import check_image
+    from ..schemas import load_material
+
+    out = _image_path(args.out)
+    material = load_material(args.material)
+    scene = options.scene_from(args)
+    registry = collect_adapters()
+    spec = model_of(registry, material.adapter, material.model, args.material, "")
+    params = spec.complete(material.params, file=args.material)
+    if args.lobe and args.lobe not in spec.lobes:
+        raise ConfigError(f"model {spec.name!r} cannot render its lobes alone", field="--lobe")
+    t0 = time.perf_counter()
+    adapter = registry.create(material.adapter)
+    try:
+        img = check_image(adapter.render(material.model, params, scene, args.lobe), scene,
+                          f"adapter {material.adapter!r} model {material.model!r}")
+    finally:
+        adapter.close()
+    if out.suffix.lower() == ".png":
+        write_png(out, preview(img, exposure(img)))
+    else:
+        write_exr(out, img)
+    if not args.quiet:
+        print(f"wrote {out} ({scene.resolution}x{scene.resolution}, {scene.spp} spp, seed {scene.seed}; "
+              f"{time.perf_counter() - t0:.2f} s; brightest pixel {float(img.max()):.4g})", file=sys.stderr)
+    return 0
+
+
+def _image_path(text: str) -> Path:
+    out = Path(text)
+    if out.suffix.lower() not in (".exr", ".png"):
+        raise ConfigError("must end in .exr (linear float) or .png (an sRGB preview)", field=f"--out {text}")
+    if out.is_dir():
+        raise ConfigError("is a folder: give an image file name", field=f"--out {text}")
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"cannot create its folder: {exc.strerror}", field=f"--out {text}") from None
+    return out

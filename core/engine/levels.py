@@ -1,0 +1,72 @@
+"""What the engine asks of the outside world: the problem at one resolution and sampling.
+
+The engine never renders by itself: it asks a `Renders` for a `Level` (the target's render
+function there and the source's images), for the source's render noise, and at the end for
+the target's noise and what the renderer does to the fitted values. `core.renders` builds one
+from two adapters; tests build one from a toy adapter the same way."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, Protocol
+
+import numpy as np
+
+from ..scene import ProbeScene
+from ..schemas import Value
+
+RenderFn = Callable[[dict[str, Value], "str | None"], np.ndarray]
+ProgressFn = Callable[[str, int, float], None]
+"""progress(stage name, target renders so far, best error so far)."""
+
+
+@dataclass(frozen=True)
+class Level:
+    """One resolution and sampling of the problem: the target's render function and the source images.
+
+    ``source_lobes`` holds the source's diffuse-only and specular-only images (None where the
+    source cannot isolate a lobe; an all-zero image where it has no such lobe)."""
+
+    render: RenderFn
+    source: np.ndarray
+    source_lobes: dict[str, np.ndarray | None] = field(default_factory=dict)
+    spp: int = 0
+
+    @property
+    def resolution(self) -> int:
+        return int(self.source.shape[0])
+
+    @property
+    def norm(self) -> float:
+        """Residuals of every stage at this level are divided by the full source image's norm."""
+        return float(np.linalg.norm(np.asarray(self.source, dtype=np.float64)))
+
+    def image(self, key: str | None) -> np.ndarray:
+        """The source image a stage matches: the full one (None) or a lobe's."""
+        if key is None:
+            return self.source
+        lobe = self.source_lobes.get(key)
+        if lobe is None:
+            raise KeyError(key)
+        return lobe
+
+
+class Renders(Protocol):
+    """The renders one remap needs. Implementations cache images and count target renders."""
+
+    scene: ProbeScene
+
+    def level(self, scene: ProbeScene, lobes: bool = True) -> Level:
+        """The problem at ``scene``'s resolution and sampling (``lobes``: render the source's lobes too)."""
+
+    def source_noise(self) -> float:
+        """Relative RMSE between two renders of the source that differ only in the seed."""
+
+    def target_noise(self, params: dict[str, Value]) -> float:
+        """The same for the target with ``params``."""
+
+    def notes(self, params: dict[str, Value]) -> list[str]:
+        """What the target renderer does to these values that the image cannot show (a trim)."""
+
+    def target_renders(self) -> int:
+        """Target renders made so far (repeats served from a cache not counted)."""

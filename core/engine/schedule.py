@@ -1,0 +1,247 @@
+"""The schedule of one remap, as declared steps: fit each planned stage (at the coarse level, then
+polished at full resolution), render the result, refine jointly while a joint step predicts a
+gain, polish at more samples when the fit ends at the render noise, and take the verdict once
+at the final parameters. The optimiser only ever calls ``render(params, lobe) -> image``."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import OptimisationError
+from ..findings import JointRefined, NoisePolished, PredictionNotRealised
+from ..metrics import delta_e_itp, relative_rmse
+from ..schemas import ModelSpec, Value
+from ..settings import Settings
+from .assess import Assessment, assess
+from .levels import Level, ProgressFn, Renders
+from .plan import Plan, PlannedStage, plan_stages
+from .residuals import Tally
+from .results import EngineResult, StageResult
+from .settled import Settled, settled
+from .space import ParamSpace
+from .stage import Stage, StageConfig
+from .tuning import Tuning
+from .verdict import Evidence, judge
+
+
+@dataclass
+class _Run:
+    """One remap's fixed context: the levels, the thresholds the noise sets, and what it did."""
+
+    target: ModelSpec
+    free: list[str]
+    renders: Renders
+    settings: Settings
+    tuning: Tuning
+    progress: ProgressFn | None
+    scene: Level
+    coarse: Level | None
+    fine: Level
+    """Where stages are polished and the result assessed: the scene, or tuning.polish_resolution."""
+    fine_suffix: str
+    source_noise: float
+    threshold: float
+    good_enough: float
+    tally: Tally = field(default_factory=Tally)
+    stages: list[StageResult] = field(default_factory=list)
+    notes: list = field(default_factory=list)
+
+    def stage(self, config: StageConfig, space: ParamSpace, level: Level, image: str | None) -> Stage:
+        return Stage(config, space, level.render, level.image(image), level.norm, self.tuning, self.tally,
+                     self.progress)
+
+    def fresh(self, name: str, lobe: str | None, **changes) -> StageConfig:
+        s, t = self.settings, self.tuning
+        base = dict(budget=t.max_renders_per_stage, starts=s.starts, ftol=t.ftol, xtol=t.xtol, method=s.method,
+                    good_enough=self.good_enough, jacobian_updates=s.jacobian_updates, start_margin=t.start_margin,
+                    rescale_starts=t.linear_starts)
+        return StageConfig(name, lobe, **{**base, **changes})
+
+    def polish(self, name: str, lobe: str | None, budget: int, origin: str = "the coarse optimum") -> StageConfig:
+        return self.fresh(name, lobe, budget=budget, starts=1, start_margin=0.0, rescale_starts=False,
+                          extend_while_gaining=True, budget_converges=True, origin=origin)
+
+    def assess(self, state: "_State") -> Assessment:
+        return assess(self.target, state.params, self.free, self.fine, self.tuning, self.tally,
+                      jacobian_updates=self.settings.jacobian_updates, seed=state.last, held=state.held,
+                      good_enough=self.good_enough)
+
+    def render_final(self, params: dict[str, Value]) -> tuple[np.ndarray, float]:
+        image = np.asarray(self.scene.render(params, None), dtype=np.float32)
+        self.tally.requests += 1
+        err = relative_rmse(self.scene.source, image)
+        if self.progress:
+            self.progress("final", self.tally.requests, err)
+        return image, err
+
+
+@dataclass
+class _State:
+    params: dict[str, Value]
+    image: np.ndarray
+    err: float
+    last: Stage | None = None
+    """The last stage fitted at the fine level: the assessment may reuse its renders and Jacobian."""
+    held: dict[str, Settled] = field(default_factory=dict)
+
+
+def remap(target: ModelSpec, base: dict[str, Value], free: list[str], renders: Renders,
+          settings: Settings = Settings(), tuning: Tuning = Tuning(), progress: ProgressFn | None = None) -> EngineResult:
+    """Fit ``free`` parameters of ``target`` (the others as in ``base``) so that the target's render
+    matches the source's, both as ``renders`` gives them at its scene."""
+    t0 = time.perf_counter()
+    run = _setup(target, free, renders, settings, tuning, progress)
+    plan = plan_stages(settings.scheme, target, free, run.scene.source_lobes)
+    run.notes += plan.findings
+    state = _fit_stages(run, plan, dict(base))
+    assessment = run.assess(state)
+    state, assessment, trust = _refine_jointly(run, plan, state, assessment)
+    state, assessment = _polish_noise_limited(run, state, assessment)
+    return _conclude(run, plan, state, assessment, trust, t0)
+
+
+def _setup(target: ModelSpec, free: list[str], renders: Renders, settings: Settings, tuning: Tuning,
+           progress: ProgressFn | None) -> _Run:
+    unknown = [p for p in free if p not in target.names]
+    if unknown:
+        raise OptimisationError(f"`free` names unknown parameters {unknown} of model {target.name!r}")
+    scene = renders.scene
+    full = renders.level(scene)
+    _check_source(full.source)
+    noise = renders.source_noise()
+    coarse = polish = None
+    if settings.coarse and 2 * settings.coarse <= scene.resolution:
+        coarse = renders.level(scene.with_(resolution=settings.coarse))
+        p = tuning.polish_resolution
+        if p and 2 * p <= scene.resolution:
+            polish = renders.level(scene.with_(resolution=p))
+    return _Run(target, list(free), renders, settings, tuning, progress, full, coarse, polish or full,
+                "" if polish is None else f"@{polish.resolution}px", noise,
+                threshold=max(settings.threshold, tuning.noise_threshold_factor * noise),
+                good_enough=max(0.0, noise * tuning.noise_stop_fraction))
+
+
+def _check_source(source: np.ndarray) -> None:
+    if source.ndim != 3 or source.shape[2] != 3:
+        raise OptimisationError(f"`source` must be an H x W x 3 image, got shape {source.shape}")
+    if not np.isfinite(source).all():
+        raise OptimisationError("`source` has NaN or Inf pixels")
+    if float(np.linalg.norm(source.astype(np.float64))) == 0.0:
+        raise OptimisationError("`source` image is black: nothing to match (check the light and the material)")
+
+
+def _fit_stages(run: _Run, plan: Plan, params: dict[str, Value]) -> _State:
+    """Each planned stage at the coarse level, then polished at the fine level from its optimum
+    over what the coarse fit did not settle (or fitted at the fine level alone without one)."""
+    last: Stage | None = None
+    held: dict[str, Settled] = {}
+    for planned in plan.stages:
+        if not planned.free:
+            continue
+        space = ParamSpace(run.target, params, planned.free)
+        settle: dict[str, Settled] = {}
+        config = run.fresh(planned.name + run.fine_suffix, planned.lobe)
+        if run.coarse is not None:
+            params, coarse = _coarse_fit(run, planned, space, params)
+            if coarse.result.start_error - coarse.result.error <= 0.01 * coarse.result.start_error:
+                continue  # nothing to do at this stage: no full-resolution pass either
+            settle = settled(coarse) if run.tuning.hold_settled else {}
+            polish_free = [p for p in planned.free if p not in settle]
+            if not polish_free:
+                last, held = None, {}
+                continue
+            space = ParamSpace(run.target, params, polish_free)
+            budget = 1 + space.jacobian_renders(run.tuning.separable_rgb) + run.tuning.fine_steps
+            config = run.polish(planned.name + run.fine_suffix, planned.lobe, budget)
+        stage = run.stage(config, space, run.fine, planned.source)
+        params = space.decode(stage.run(space.encode(params)))
+        run.stages.append(stage.result.model_copy(update={"held": {k: v.why for k, v in settle.items()}}))
+        last, held = stage, settle
+    image, err = run.render_final(params)
+    return _State(params, image, err, last, held)
+
+
+def _coarse_fit(run: _Run, planned: PlannedStage, space: ParamSpace,
+                params: dict[str, Value]) -> tuple[dict[str, Value], Stage]:
+    t = run.tuning
+    config = run.fresh(f"{planned.name}@{run.coarse.resolution}px", planned.lobe, ftol=t.coarse_tol, xtol=t.coarse_tol)
+    stage = run.stage(config, space, run.coarse, planned.source)
+    params = space.decode(stage.run(space.encode(params)))
+    run.stages.append(stage.result)
+    return params, stage
+
+
+def _refine_jointly(run: _Run, plan: Plan, state: _State, assessment: Assessment) -> tuple[_State, Assessment, bool]:
+    """The merged lobes are provably not a minimum of the full image (a coupling the split cannot
+    see, e.g. a little Metallic standing in for Specular): refine jointly from here, again while
+    a round ends with a joint step still predicting a gain. Returns whether the prediction is to
+    be trusted: rounds that realise under a quarter of the gain first predicted show that the
+    step's linear model does not hold here (render noise or curvature)."""
+    if plan.scheme == "one" or len(plan.stages) < 2:
+        return state, assessment, True
+    rounds, err0, predicted0 = 0, state.err, assessment.predicted
+    while assessment.predicted is not None and rounds < run.tuning.joint_rounds:
+        rounds += 1
+        space = ParamSpace(run.target, state.params, run.free)
+        name = "joint-refine" + run.fine_suffix + ("" if rounds == 1 else f" #{rounds}")
+        joint = run.stage(run.polish(name, None, 2 * (space.dim + 1) + 1, origin="the merged result"), space,
+                          run.fine, None)
+        refined = space.decode(joint.run(space.encode(state.params)))
+        if not joint.result.error < joint.result.start_error:
+            run.stages.append(joint.result.model_copy(update={"kept": False}))
+            break
+        image, err = run.render_final(refined)
+        run.stages.append(joint.result.model_copy(update={"kept": err < state.err}))
+        if not err < state.err:
+            break
+        state = _State(refined, image, err, joint)
+        assessment = run.assess(state)
+    if rounds and state.err < err0:
+        run.notes.append(JointRefined(before=err0, after=state.err, rounds=rounds))
+    if rounds and assessment.predicted is not None and err0 - state.err < 0.25 * (err0 - predicted0):
+        run.notes.append(PredictionNotRealised(predicted_now=assessment.predicted, rounds=rounds, before=err0,
+                                               after=state.err, predicted_first=predicted0))
+        return state, assessment, False
+    return state, assessment, True
+
+
+def _polish_noise_limited(run: _Run, state: _State, assessment: Assessment) -> tuple[_State, Assessment]:
+    """The fit ended within a few times the render noise: what is left is noise, which more
+    samples shrink where more iterations cannot (the target's noise biases a fitted reflectance
+    low). One short polish of every free parameter, source and target at `precise_spp` times the
+    samples, kept if it lowers the error there; the error reported stays the scene's."""
+    k, scene = run.settings.precise_spp, run.renders.scene
+    if k <= 1 or not run.free or not state.err < run.tuning.precise_below * run.source_noise:
+        return state, assessment
+    level = run.renders.level(scene.with_(spp=scene.spp * k), lobes=False)
+    space = ParamSpace(run.target, state.params, run.free)
+    budget = 1 + space.jacobian_renders(run.tuning.separable_rgb) + run.tuning.fine_steps
+    config = run.fresh(f"precise@{scene.spp * k}spp", None, budget=budget, starts=1, start_margin=0.0,
+                       good_enough=0.0, budget_converges=True, origin="the fit")
+    stage = run.stage(config, space, level, None)
+    params = space.decode(stage.run(space.encode(state.params)))
+    kept = stage.result.error < stage.result.start_error
+    run.stages.append(stage.result.model_copy(update={"kept": kept}))
+    if not kept:
+        return state, assessment
+    image, err = run.render_final(params)
+    run.notes.append(NoisePolished(error=state.err, source_noise=run.source_noise, factor=run.tuning.precise_below,
+                                   spp=scene.spp * k, before=stage.result.start_error, after=stage.result.error))
+    state = _State(params, image, err, stage)
+    return state, run.assess(state)
+
+
+def _conclude(run: _Run, plan: Plan, state: _State, assessment: Assessment, trust: bool, t0: float) -> EngineResult:
+    target_noise = run.renders.target_noise(state.params)
+    evidence = Evidence(error=state.err, threshold=run.threshold, assessment=assessment, stages=run.stages,
+                        cond_limit=run.tuning.cond_limit, renderer_notes=run.renders.notes(state.params),
+                        trust_prediction=trust)
+    return EngineResult(
+        params=state.params, fitted=list(run.free), scheme=run.settings.scheme, scheme_used=plan.scheme,
+        relative_rmse=state.err, perceptual=delta_e_itp(run.scene.source, state.image), threshold=run.threshold,
+        source_noise=run.source_noise, target_noise=target_noise, renders=run.renders.target_renders(),
+        seconds=time.perf_counter() - t0, verdict=judge(evidence, run.notes), target_image=state.image,
+        stages=list(run.stages), jacobian_condition=assessment.condition)

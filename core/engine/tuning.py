@@ -1,0 +1,48 @@
+"""The engine's private knobs and its version. Users choose `Settings`; these stay with the engine
+(benchmarks set them to measure what each one buys: see docs/engine.md)."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel, ConfigDict, Field
+
+ENGINE_VERSION = 2
+"""Bump whenever a change to the engine would change a result. A stored result is reused (a
+resumed sweep, a library rerun) only when its job key, which includes this number, matches."""
+
+
+class Tuning(BaseModel):
+    """How the engine fits, below the level of `Settings`. Defaults are the measured best."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    fd_step: float = Field(0.01, gt=0, lt=0.5, description="Forward-difference step in normalised parameter units.")
+    polish_resolution: int | None = Field(
+        None, ge=8, description="Resolution where each stage is polished and the verdict taken, when the scene's is "
+                                "at least twice it and there is a coarse level (None: the scene's own).")
+    coarse_tol: float = Field(1e-2, gt=0, description="ftol and xtol of the coarse level.")
+    start_margin: float = Field(0.05, ge=0, lt=0.5, description="A fresh fit's start that lies on a bound is moved "
+                                                                 "this far inside it (normalised units).")
+    linear_starts: bool = Field(True, description="Scale each start's reflectance that its image is proportional to "
+                                                  "(ParamSpec.linear_in) to fit best, predicted without a render.")
+    separable_rgb: bool = Field(True, description="One render for the three Jacobian columns of a separable RGB "
+                                                  "parameter.")
+    refresh_on_retry: bool = Field(True, description="A step that had to be retried gets a rendered Jacobian (False: "
+                                                     "the rejected trials update it as secants).")
+    fine_steps: int = Field(2, ge=0, description="Renders a polish may take beyond its start and one Jacobian (two "
+                                                 "more while its latest improvement gained 1 %).")
+    hold_settled: bool = Field(True, description="The polish leaves out what the coarse fit settled: a parameter "
+                                                 "pinned on a bound its gradient pushes against, or inert there.")
+    precise_below: float = Field(3.0, gt=0, description="A fit ending within this many times the source's render "
+                                                        "noise gets the polish at `Settings.precise_spp` samples.")
+    max_renders_per_stage: int = Field(80, ge=1, le=100_000, description="Render budget of one fresh stage.")
+    ftol: float = Field(1e-4, gt=0, description="Least-squares ftol (relative cost change that stops a fit).")
+    xtol: float = Field(1e-4, gt=0, description="Least-squares xtol (relative step that stops a fit).")
+    cond_limit: float = Field(1e4, gt=1, description="Jacobian condition number above which the result is flagged.")
+    joint_rounds: int = Field(2, ge=0, description="Joint refinements of a merged two-stage result while a "
+                                                   "Gauss-Newton step predicts a gain.")
+    joint_min_gain: float = Field(0.002, ge=0, description="... a gain of at least 15 % of the error and this much "
+                                                           "relative RMSE.")
+    noise_threshold_factor: float = Field(2.0, ge=0, description="The error threshold is at least this many times the "
+                                                                  "source's render noise.")
+    noise_stop_fraction: float = Field(1 / 3, ge=0, description="A fit stops once its error falls to this fraction "
+                                                                "of the source's render noise (below, steps fit noise).")

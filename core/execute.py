@@ -1,0 +1,151 @@
+"""Run one job: render the source, fit the target, and produce its report and files in memory.
+
+This is where adapters meet the engine; it still knows no renderer by name. `run_job` is what
+an executor calls, in this process or in a worker process or on a Dask worker: it returns an
+`Outcome` (the report and the bytes of every file), which the caller's store writes."""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import tempfile
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Iterator
+
+import numpy as np
+
+from .engine import ProgressFn, remap
+from .imageio import write_exr, write_previews
+from .job import Job, Resolved, resolve
+from .metrics import error_map
+from .plugins import AdapterRegistry, collect_adapters
+from .protocol import Adapter
+from .renders import CachedRenderer, ProbeRenders
+from .report import FileRecord, Report, build_report
+from .schemas import Value
+
+
+@dataclass
+class Outcome:
+    """What one job produced: its report, the two images, and the bytes of its files by name."""
+
+    report: Report
+    source_image: np.ndarray
+    target_image: np.ndarray
+    files: dict[str, bytes]
+
+
+class AdapterPool:
+    """The adapters one process has open: each constructed once (this is where renderers get
+    imported and workers start) and closed together."""
+
+    def __init__(self, registry: AdapterRegistry):
+        self.registry = registry
+        self.open: dict[str, Adapter] = {}
+
+    def __getitem__(self, name: str) -> Adapter:
+        if name not in self.open:
+            self.open[name] = self.registry.create(name)
+        return self.open[name]
+
+    def close(self) -> None:
+        for a in self.open.values():
+            a.close()
+        self.open.clear()
+
+
+_POOL: AdapterPool | None = None
+
+
+@contextmanager
+def adapter_pool(registry: AdapterRegistry) -> Iterator[AdapterPool]:
+    """Jobs run in this process use ``registry``'s adapters until the block ends, then close them."""
+    global _POOL
+    previous, _POOL = _POOL, AdapterPool(registry)
+    try:
+        yield _POOL
+    finally:
+        _POOL.close()
+        _POOL = previous
+
+
+def _pool(renderer_files: tuple[str, ...]) -> AdapterPool:
+    """This process's pool: the one a caller opened, or (a worker process) one of its own, kept
+    for the worker's life so every job after the first finds its renderers started."""
+    global _POOL
+    if _POOL is None:
+        _POOL = AdapterPool(collect_adapters())
+    for f in renderer_files:
+        _POOL.registry.resolve(f)
+    return _POOL
+
+
+def run_job(job: Job, renderer_files: tuple[str, ...] = (), progress: ProgressFn | None = None) -> Outcome:
+    """Run a job (already resolved once by the caller, so its errors were reported before any
+    render) with this process's adapters."""
+    pool = _pool(tuple(renderer_files))
+    return execute(resolve(job, pool.registry), pool, progress)
+
+
+def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | None = None) -> Outcome:
+    t0 = time.perf_counter()
+    job = resolved.job
+    src, tgt = job.source, job.target
+    source = CachedRenderer(adapters[src.adapter], src.adapter, src.model, job.scene)
+    target = CachedRenderer(adapters[tgt.adapter], tgt.adapter, tgt.model, job.scene)
+    renders = ProbeRenders(source, resolved.source_params, resolved.source_spec, target, job.scene)
+    if progress:
+        progress("source", 0, float("nan"))
+    start = informed_start(resolved, adapters) if job.settings.start == "informed" else {}
+    result = remap(resolved.target_spec, {**resolved.base, **start}, resolved.free, renders, job.settings, job.tuning,
+                   progress)
+    files = artifacts(adapters[tgt.adapter], tgt.model, result.params, renders.source_image(), result.target_image)
+    info = describe(adapters, list(dict.fromkeys((src.adapter, tgt.adapter))))
+    derived = (adapters[src.adapter].derived(src.model, resolved.source_params),
+               adapters[tgt.adapter].derived(tgt.model, result.params))
+    report = build_report(resolved, result, start=start, derived=derived, source_renders=renders.source_renders(),
+                          renders_by_resolution=target.renders_by_resolution(), seconds=time.perf_counter() - t0,
+                          adapters=info, files=[FileRecord(name=n, sha256=hashlib.sha256(b).hexdigest(), bytes=len(b))
+                                                for n, b in files.items()])
+    return Outcome(report, renders.source_image(), result.target_image, files)
+
+
+def artifacts(adapter: Adapter, model: str, params: dict[str, Value], source: np.ndarray,
+              target: np.ndarray) -> dict[str, bytes]:
+    """The result's files, by name: linear EXRs, PNG previews, the material in the target's own form."""
+    with tempfile.TemporaryDirectory(prefix="brdfremap-") as tmp:
+        d = Path(tmp)
+        write_exr(d / "source.exr", source)
+        write_exr(d / "target.exr", target)
+        write_previews(d, source, target, error_map(source, target))
+        paths = [d / n for n in ("source.exr", "target.exr", "source.png", "target.png", "error.png")]
+        paths += [Path(p) for p in adapter.write_native(model, params, d)]
+        return {p.name: p.read_bytes() for p in paths}
+
+
+def informed_start(resolved: Resolved, adapters: AdapterPool) -> dict[str, Value]:
+    """The exporters' conversion of the source into the target's fitted parameters (clipped to
+    their bounds), or {} when either adapter has no neutral reading for its model. A value of
+    the wrong shape or not finite is left out: the start is a hint, the fit does not need it."""
+    job = resolved.job
+    look = adapters[job.source.adapter].appearance(job.source.model, resolved.source_params)
+    if look is None:
+        return {}
+    conv = adapters[job.target.adapter].from_appearance(job.target.model, look, dict(resolved.base))
+    out: dict[str, Value] = {}
+    for name in resolved.free:
+        try:
+            v = resolved.target_spec.param(name).clip(conv[name])
+        except (KeyError, TypeError, ValueError):
+            continue
+        if all(map(math.isfinite, v if isinstance(v, tuple) else (v,))):  # type: ignore[arg-type]
+            out[name] = v
+    return out
+
+
+def describe(adapters: AdapterPool, names: list[str]) -> dict[str, dict[str, Any]]:
+    """Each adapter's runtime facts for the report (renderer version, variant)."""
+    return {n: {"plugin": adapters.registry.get(n).plugin, **adapters[n].describe()} for n in names}

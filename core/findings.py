@@ -1,0 +1,220 @@
+"""What the verdict found about a result: typed findings, each with its own sentence.
+
+A finding of severity ``unreliable`` makes the result not trustworthy as it stands; a ``note``
+explains something about the fit without questioning it. The verdict is derived from the
+findings alone (`Verdict.of`), never from their text."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal, Union
+
+from pydantic import BaseModel, ConfigDict, Field, computed_field, model_validator
+
+Severity = Literal["unreliable", "note"]
+
+
+class _Finding(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _drop_derived(cls, data: Any) -> Any:
+        # A report read back carries the derived fields too; they are recomputed, not trusted.
+        if isinstance(data, dict):
+            return {k: v for k, v in data.items() if k not in ("severity", "message")}
+        return data
+
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def severity(self) -> Severity:
+        return "unreliable"
+
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def message(self) -> str:
+        return self.sentence()
+
+    def sentence(self) -> str:  # pragma: no cover - every finding defines its own
+        raise NotImplementedError
+
+
+class _Note(_Finding):
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def severity(self) -> Severity:
+        return "note"
+
+
+class ErrorAboveThreshold(_Finding):
+    kind: Literal["error_above_threshold"] = "error_above_threshold"
+    error: float
+    threshold: float
+
+    def sentence(self) -> str:
+        return f"error {self.error:.1%} above the {self.threshold:.0%} threshold"
+
+
+class ModelMismatch(_Finding):
+    """Only the error is above the threshold, and the fit converged with nothing pinned or
+    ill-conditioned: the closest this target model gets."""
+
+    kind: Literal["model_mismatch"] = "model_mismatch"
+    error: float
+    threshold: float
+
+    def sentence(self) -> str:
+        return (f"error {self.error:.1%} above the {self.threshold:.0%} threshold although the fit converged with no "
+                "parameter pinned and a well-conditioned Jacobian: a model mismatch (the closest this target model "
+                "gets), not a failed fit")
+
+
+class NoEffect(_Finding):
+    kind: Literal["no_effect"] = "no_effect"
+
+    def sentence(self) -> str:
+        return "no fitted parameter changes the image (ill-conditioned Jacobian)"
+
+
+class IllConditioned(_Finding):
+    kind: Literal["ill_conditioned"] = "ill_conditioned"
+    condition: float
+
+    def sentence(self) -> str:
+        return f"ill-conditioned Jacobian (condition {self.condition:.2g}): parameters trade off against each other"
+
+
+class NotAtMinimum(_Finding):
+    kind: Literal["not_at_minimum"] = "not_at_minimum"
+    predicted: float = Field(description="Relative RMSE a bounded Gauss-Newton step from the result predicts.")
+
+    def sentence(self) -> str:
+        return f"not at a minimum of the full image: a joint step predicts {self.predicted:.1%} (try --scheme three)"
+
+
+class PinnedOnBound(_Finding):
+    kind: Literal["pinned_on_bound"] = "pinned_on_bound"
+    parameter: str
+    side: Literal["lower", "upper"]
+    error_without: float = Field(description="Relative RMSE predicted if the bound were not there.")
+
+    def sentence(self) -> str:
+        return (f"{self.parameter} pinned at its {self.side} bound (without it the error would drop to about "
+                f"{self.error_without:.1%})")
+
+
+class RendererAlters(_Finding):
+    """The target renderer changes the fitted values before rendering (a trimmed reflectance):
+    the numbers do not mean what they say."""
+
+    kind: Literal["renderer_alters"] = "renderer_alters"
+    detail: str
+
+    def sentence(self) -> str:
+        return f"the renderer alters the fitted parameters: {self.detail}"
+
+
+class SchemeChosen(_Note):
+    kind: Literal["scheme_chosen"] = "scheme_chosen"
+    scheme: str
+    why: str
+    fallback: bool = Field(False, description="The scheme asked for could not run; this one ran instead.")
+
+    def sentence(self) -> str:
+        if self.fallback:
+            return f"{self.why}; fell back to {self.scheme}-stage"
+        return f"scheme auto: {self.scheme}-stage ({self.why})"
+
+
+class DeadParameters(_Note):
+    kind: Literal["dead_parameters"] = "dead_parameters"
+    parameters: list[str]
+
+    def sentence(self) -> str:
+        return f"{', '.join(self.parameters)} did not change the image at the solution: left where the fit put it"
+
+
+class JointRefined(_Note):
+    kind: Literal["joint_refined"] = "joint_refined"
+    before: float
+    after: float
+    rounds: int
+
+    def sentence(self) -> str:
+        return (f"two-stage result was not a minimum of the full image; joint refinement took it from "
+                f"{self.before:.2%} to {self.after:.2%}" + (f" in {self.rounds} rounds" if self.rounds > 1 else ""))
+
+
+class PredictionNotRealised(_Note):
+    kind: Literal["prediction_not_realised"] = "prediction_not_realised"
+    predicted_now: float
+    rounds: int
+    before: float
+    after: float
+    predicted_first: float
+
+    def sentence(self) -> str:
+        s = "s" if self.rounds > 1 else ""
+        return (f"a joint step still predicts {self.predicted_now:.1%}, but {self.rounds} joint round{s} took the "
+                f"error only from {self.before:.2%} to {self.after:.2%} (predicted {self.predicted_first:.2%}): the "
+                "prediction does not hold here (render noise or curvature)")
+
+
+class NoisePolished(_Note):
+    kind: Literal["noise_polished"] = "noise_polished"
+    error: float = Field(description="Relative RMSE before this polish, at the scene's samples.")
+    source_noise: float
+    factor: float
+    spp: int
+    before: float = Field(description="Relative RMSE at `spp` before the polish.")
+    after: float = Field(description="Relative RMSE at `spp` after it.")
+
+    def sentence(self) -> str:
+        return (f"noise-limited (error {self.error:.2%}, within {self.factor:g}x the source's render noise "
+                f"{self.source_noise:.2%}): polished at {self.spp} spp, {self.before:.3%} -> {self.after:.3%} there")
+
+
+Finding = Annotated[
+    Union[ErrorAboveThreshold, ModelMismatch, NoEffect, IllConditioned, NotAtMinimum, PinnedOnBound, RendererAlters,
+          SchemeChosen, DeadParameters, JointRefined, PredictionNotRealised, NoisePolished],
+    Field(discriminator="kind"),
+]
+
+Status = Literal["ok", "mismatch", "unreliable"]
+
+
+class Verdict(BaseModel):
+    """The findings, and what they add up to: ok (nothing unreliable), mismatch (only a model
+    mismatch: the closest this target model gets) or unreliable."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    status: Status
+    findings: list[Finding] = Field(default_factory=list)
+
+    @classmethod
+    def of(cls, findings: list) -> "Verdict":
+        problems = [f for f in findings if f.severity == "unreliable"]
+        if not problems:
+            status: Status = "ok"
+        elif all(isinstance(f, ModelMismatch) for f in problems):
+            status = "mismatch"
+        else:
+            status = "unreliable"
+        return cls(status=status, findings=list(findings))
+
+    @property
+    def reliable(self) -> bool:
+        return self.status == "ok"
+
+    @property
+    def problems(self) -> list:
+        return [f for f in self.findings if f.severity == "unreliable"]
+
+    @property
+    def notes(self) -> list[str]:
+        return [f.message for f in self.findings if f.severity == "note"]
+
+    @property
+    def reason(self) -> str:
+        """The unreliable findings' sentences, joined; "ok" when there are none."""
+        return "; ".join(f.message for f in self.problems) or "ok"

@@ -1,0 +1,131 @@
+"""One unit of work: a source material remapped to a target model, under a scene and settings.
+
+A `Job` is data (pydantic: serialisable, sent to worker processes and Dask workers as is).
+`resolve` validates it once, before any render, against the installed adapters and returns it
+in canonical form (adapter names checked, parameters completed and coerced, adapter versions
+recorded), together with what the engine needs. `Job.key()` of a canonical job identifies its
+result: the same key means the same result, so a stored one can be reused."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from .engine.tuning import ENGINE_VERSION, Tuning
+from .errors import ConfigError
+from .plugins import AdapterRegistry
+from .scene import ProbeScene
+from .schemas import Material, ModelSpec, Value
+from .settings import Settings
+
+
+class Target(BaseModel):
+    """The target side of a job: an adapter's model, and parameters held fixed."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    adapter: str = Field(description="Target adapter (see `remap adapters`).")
+    model: str = Field(description="Material model of that adapter.")
+    fix: dict[str, Any] = Field(default_factory=dict, description="Target parameters held at these values.")
+
+
+class Job(BaseModel):
+    """A remap request, complete: what determines its result, and a label for people."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    source: Material
+    target: Target
+    scene: ProbeScene = Field(default_factory=ProbeScene)
+    settings: Settings = Field(default_factory=Settings)
+    tuning: Tuning = Field(default_factory=Tuning, description="Engine internals (benchmarks change them).")
+    label: str = Field("", description="Where the source came from (a file, a point, a material); not in the key.")
+    versions: dict[str, str] = Field(default_factory=dict, description="Versions of the adapters involved, "
+                                                                       "recorded by `resolve`; in the key.")
+
+    def key(self) -> str:
+        """The hash of everything that determines the result (the engine version included),
+        not of labels, names or notes."""
+        doc = {
+            "engine": ENGINE_VERSION,
+            "source": self.source.model_dump(mode="json", exclude={"name"}),
+            "target": self.target.model_dump(mode="json"),
+            "scene": json.loads(self.scene.cache_key()),
+            "settings": self.settings.model_dump(mode="json"),
+            "tuning": self.tuning.model_dump(mode="json"),
+            "versions": self.versions,
+        }
+        blob = json.dumps(doc, sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(blob.encode()).hexdigest()[:20]
+
+
+@dataclass(frozen=True)
+class Where:
+    """Where a job's fields came from, so an error names them as the user wrote them: a material
+    file (fields `adapter`, `params.alpha`), an experiment (`source.model`, `target.fix.alpha`)
+    or the command line (`--model`)."""
+
+    source_file: str | None = None
+    source_prefix: str = ""
+    params_prefix: str = "params"
+    target_file: str | None = None
+    target_prefix: str = "--"
+    fix_prefix: str = "--fix"
+
+
+@dataclass(frozen=True)
+class Resolved:
+    """A validated job in canonical form, and what the engine needs of it."""
+
+    job: Job
+    source_spec: ModelSpec
+    target_spec: ModelSpec
+    source_params: dict[str, Value]
+    base: dict[str, Value]
+    """The target's complete parameters before the fit: defaults, carried choices, fixed values."""
+    free: list[str]
+    fixed: dict[str, Value]
+
+
+def model_of(registry: AdapterRegistry, adapter: str, model: str, file: str | None, prefix: str) -> ModelSpec:
+    entry = registry.get(adapter, file=file, field_name=f"{prefix}adapter")
+    if model not in entry.models:
+        known = ", ".join(sorted(entry.models)) or "none"
+        raise ConfigError(f"adapter {adapter!r} has no model {model!r} (models: {known})", file=file,
+                          field=f"{prefix}model")
+    return entry.models[model]
+
+
+def resolve(job: Job, registry: AdapterRegistry, where: Where = Where()) -> Resolved:
+    """Check everything before any render: adapters, models, parameters, bounds. Adapters are
+    named, never given as files here: a data file must not choose a program to run."""
+    src = job.source
+    src_spec = model_of(registry, src.adapter, src.model, where.source_file, where.source_prefix)
+    src_params = src_spec.complete(src.params, file=where.source_file, prefix=where.params_prefix)
+    tgt = job.target
+    tgt_spec = model_of(registry, tgt.adapter, tgt.model, where.target_file, where.target_prefix)
+    given = tgt_spec.complete(tgt.fix, file=where.target_file, prefix=where.fix_prefix)
+    fixed = {k: given[k] for k in tgt.fix}
+    base = tgt_spec.complete({})
+    if (src.adapter, src.model) == (tgt.adapter, tgt.model):
+        # Same model: discrete choices (distribution, material preset) carry over unless fixed.
+        for p in tgt_spec.parameters:
+            if p.kind == "choice":
+                base[p.name] = src_params[p.name]
+    base.update(fixed)
+    free = tgt_spec.fittable(base, fixed=set(fixed))
+    versions = {name: registry.get(name).version for name in dict.fromkeys((src.adapter, tgt.adapter))}
+    canonical = job.model_copy(update={
+        "source": src.model_copy(update={"params": _plain(src_params)}),
+        "target": tgt.model_copy(update={"fix": _plain(fixed)}),
+        "versions": versions,
+    })
+    return Resolved(canonical, src_spec, tgt_spec, src_params, base, free, fixed)
+
+
+def _plain(params: dict[str, Value]) -> dict[str, Any]:
+    return {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()}

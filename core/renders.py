@@ -1,0 +1,143 @@
+"""The renders of one remap, from two adapters: every image checked, cached and counted.
+
+`ProbeRenders` is what the engine asks for (`core.engine.Renders`): the problem at a
+resolution and sampling (the target's render function there, the source's images), the
+render noise of each side, and what the target renderer does to fitted values."""
+
+from __future__ import annotations
+
+import collections
+from typing import Any
+
+import numpy as np
+
+from .cache import RenderCache, render_key
+from .engine.levels import Level
+from .metrics import relative_rmse
+from .protocol import Adapter, check_image
+from .scene import ProbeScene
+from .schemas import ModelSpec, Value
+
+
+def _round(v: Value) -> Value:
+    if isinstance(v, tuple):
+        return tuple(float(f"{x:.9g}") for x in v)
+    if isinstance(v, float):
+        return float(f"{v:.9g}")
+    return v
+
+
+def rounded(params: dict[str, Value]) -> dict[str, Value]:
+    """Parameters as the cache keys and reports write them (9 significant digits)."""
+    return {k: _round(v) for k, v in params.items()}
+
+
+class CachedRenderer:
+    """One adapter's model, rendered through a cache; ``cache.misses`` counts real renders."""
+
+    def __init__(self, adapter: Adapter, name: str, model: str, scene: ProbeScene):
+        self.adapter, self.name, self.model, self.scene = adapter, name, model, scene
+        self.cache = RenderCache()
+        self.by_resolution: collections.Counter[tuple[int, int]] = collections.Counter()  # (resolution, spp)
+        self.who = f"adapter {name!r} model {model!r}"
+
+    def _key(self, params: dict[str, Value], lobe: str | None, scene: ProbeScene) -> str:
+        return render_key(self.name, self.model, rounded(params), scene.cache_key(), lobe)
+
+    def __call__(self, params: dict[str, Value], lobe: str | None = None, scene: ProbeScene | None = None):
+        sc = scene or self.scene
+
+        def render():
+            self.by_resolution[sc.resolution, sc.spp] += 1
+            return check_image(self.adapter.render(self.model, dict(params), sc, lobe), sc, self.who)
+
+        return self.cache.get_or_render(self._key(params, lobe, sc), render)
+
+    def many(self, items: list[tuple[dict[str, Value], str | None]], scene: ProbeScene | None = None) -> None:
+        """Render the uncached ones of several requests in one batch (in parallel where the adapter can)."""
+        sc = scene or self.scene
+        todo, seen = [], set()
+        for params, lobe in items:
+            key = self._key(params, lobe, sc)
+            if key not in self.cache and key not in seen:
+                seen.add(key)
+                todo.append((key, params, lobe))
+        if len(todo) < 2:
+            return
+        images = self.adapter.render_batch([(self.model, dict(p), sc, lobe) for _, p, lobe in todo])
+        for (key, _, _), img in zip(todo, images):
+            self.by_resolution[sc.resolution, sc.spp] += 1
+            checked = check_image(img, sc, self.who)
+            self.cache.get_or_render(key, lambda: checked)
+
+    def renders_by_resolution(self) -> dict[str, int]:
+        """Renders by "32px", "128px" (the scene's samples) and e.g. "128px@64spp" (more samples)."""
+        spp = self.scene.spp
+        return {f"{res}px" + ("" if n == spp else f"@{n}spp"): v for (res, n), v in sorted(self.by_resolution.items())}
+
+
+class _AtScene:
+    """The target at one scene, as the engine calls it: render(params, lobe), and many(...)."""
+
+    def __init__(self, target: CachedRenderer, scene: ProbeScene):
+        self.target, self.scene = target, scene
+
+    def __call__(self, params: dict[str, Value], lobe: str | None = None) -> np.ndarray:
+        return self.target(params, lobe, scene=self.scene)
+
+    def many(self, items: list[tuple[dict[str, Value], str | None]]) -> None:
+        self.target.many(items, scene=self.scene)
+
+
+class ProbeRenders:
+    """`core.engine.Renders` for a source material and a target model."""
+
+    def __init__(self, source: CachedRenderer, source_params: dict[str, Value], source_spec: ModelSpec,
+                 target: CachedRenderer, scene: ProbeScene):
+        self.source, self.source_params, self.source_spec = source, dict(source_params), source_spec
+        self.target, self.scene = target, scene
+        self._levels: dict[tuple[str, bool], Level] = {}
+        self._noise: float | None = None
+
+    def level(self, scene: ProbeScene, lobes: bool = True) -> Level:
+        key = (scene.cache_key(), lobes)
+        if key not in self._levels:
+            full, found = self._source_images(scene, lobes)
+            self._levels[key] = Level(_AtScene(self.target, scene), full, found, scene.spp)
+        return self._levels[key]
+
+    def _source_images(self, scene: ProbeScene, lobes: bool) -> tuple[np.ndarray, dict[str, Any]]:
+        """The source's full image and its lobes (None: cannot isolate; zeros: has no such lobe).
+        The lobes come first: an adapter whose render yields every lobe at once (Cycles' passes)
+        then serves the full image from it, where a full image alone is rendered without them."""
+        if not lobes:
+            return self.source(self.source_params, scene=scene), {}
+        specs = {lobe: self.source_spec.lobes.get(lobe) for lobe in ("diffuse", "specular")}
+        rendered = {lobe: self.source(self.source_params, lobe, scene=scene)
+                    for lobe, spec in specs.items() if spec is not None and not spec.empty}
+        full = self.source(self.source_params, scene=scene)
+        found = {lobe: None if spec is None else np.zeros_like(full) if spec.empty else rendered[lobe]
+                 for lobe, spec in specs.items()}
+        return full, found
+
+    def source_image(self) -> np.ndarray:
+        return self.level(self.scene).source
+
+    def source_noise(self) -> float:
+        if self._noise is None:
+            second = self.source(self.source_params, scene=self.scene.with_(seed=self.scene.seed + 1))
+            self._noise = relative_rmse(self.source_image(), second)
+        return self._noise
+
+    def target_noise(self, params: dict[str, Value]) -> float:
+        first = self.target(params)
+        return relative_rmse(first, self.target(params, scene=self.scene.with_(seed=self.scene.seed + 1)))
+
+    def notes(self, params: dict[str, Value]) -> list[str]:
+        return list(self.target.adapter.notes(self.target.model, params))
+
+    def target_renders(self) -> int:
+        return self.target.cache.misses
+
+    def source_renders(self) -> int:
+        return self.source.cache.misses

@@ -1,0 +1,199 @@
+"""The report of one job: `result.json`, a versioned pydantic model produced once (`build_report`)
+and never edited. `remap schema report` prints its JSON Schema; `read_report` reads one back
+and says clearly when it was written by another version of the format."""
+
+from __future__ import annotations
+
+import json
+import math
+import platform
+from pathlib import Path
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, computed_field, model_validator
+
+from .configio import validation_message
+from .engine.results import EngineResult, StageResult
+from .engine.tuning import ENGINE_VERSION
+from .errors import ConfigError
+from .findings import Finding, Status, Verdict
+from .job import Job, Resolved
+from .renders import rounded
+
+SCHEMA_VERSION = 2
+"""Bump when a field is renamed, removed or changes meaning (adding one is compatible)."""
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class SourceRecord(_Strict):
+    file: str = Field(description="Where the source came from (file, point or material).")
+    name: str = Field(description="The material's name.")
+    adapter: str
+    model: str
+    params: dict[str, Any] = Field(description="The source's parameters that mean something with its choices.")
+    derived: dict[str, Any] = Field(default_factory=dict, description="Quantities that follow from them (a "
+                                                                      "conductor's reflectivity), from its adapter.")
+
+
+class TargetRecord(_Strict):
+    adapter: str
+    model: str
+
+
+class Metrics(_Strict):
+    relative_rmse: float = Field(description="||target - source|| / ||source|| over all pixels (the paper's L2).")
+    perceptual: float = Field(description="Mean ΔE_ITP over the object (1 ≈ just noticeable).")
+    noise_floor: float = Field(description="Relative RMSE expected between two renders of one material (source and "
+                                           "target noise, each from a second seed).")
+    noise_source: float
+    noise_target: float
+    threshold: float = Field(description="The error threshold the verdict used: the setting, or twice the source's "
+                                         "render noise when that is more.")
+    jacobian_condition: float | None = Field(description="Condition number of the final Jacobian (None: not "
+                                                         "defined, fewer than two live parameters).")
+
+
+class Start(_Strict):
+    informed: bool = Field(description="The fit started from the exporters' conversion of the source.")
+    params: dict[str, Any] = Field(description="That conversion, where it was used.")
+
+
+class FileRecord(_Strict):
+    name: str
+    sha256: str
+    bytes: int
+
+
+class Report(_Strict):
+    """`result.json`: what one job produced and what it is worth."""
+
+    schema_version: int = Field(SCHEMA_VERSION, description="Version of this format.")
+    tool: str = Field(description="The program and version that wrote it.")
+    engine: int = Field(description="Engine version (see core/engine/tuning.py).")
+    key: str = Field(description="The job's key: equal keys, equal results.")
+    job: Job = Field(description="The job in canonical form (completed parameters).")
+    source: SourceRecord
+    target: TargetRecord
+    params: dict[str, Any] = Field(description="The fitted target parameters that mean something (complete set "
+                                               "less those inactive with its choices).")
+    derived: dict[str, Any] = Field(default_factory=dict, description="Quantities that follow from the fitted "
+                                                                      "parameters, from the target adapter.")
+    fitted: list[str]
+    fixed: dict[str, Any]
+    metrics: Metrics
+    start: Start
+    renders: int = Field(description="Target renders made.")
+    renders_by_resolution: dict[str, int]
+    source_renders: int
+    seconds: float
+    scheme: str
+    scheme_used: str
+    verdict: Status = Field(description="ok; mismatch (only a model mismatch: the closest this target model "
+                                        "gets); unreliable (see findings).")
+    findings: list[Finding]
+    stages: list[StageResult]
+    adapters: dict[str, dict[str, Any]] = Field(description="Each adapter's runtime facts (renderer version, "
+                                                            "variant).")
+    host: dict[str, str]
+    files: list[FileRecord] = Field(description="The files of this result beside result.json, with their hashes.")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _drop_derived(cls, data: Any) -> Any:
+        if isinstance(data, dict):
+            return {k: v for k, v in data.items() if k not in ("reliable", "reason", "notes")}
+        return data
+
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def reliable(self) -> bool:
+        return self.verdict == "ok"
+
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def reason(self) -> str:
+        """The unreliable findings' sentences; "ok" when there are none."""
+        return self.as_verdict().reason
+
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def notes(self) -> list[str]:
+        return self.as_verdict().notes
+
+    def as_verdict(self) -> Verdict:
+        return Verdict(status=self.verdict, findings=self.findings)
+
+    def document(self) -> dict[str, Any]:
+        return self.model_dump(mode="json")
+
+
+def build_report(resolved: Resolved, result: EngineResult, *, start: dict, derived: tuple[dict, dict],
+                 source_renders: int, renders_by_resolution: dict[str, int], seconds: float,
+                 adapters: dict[str, dict[str, Any]], files: list[FileRecord]) -> Report:
+    """The report, in one place: ``derived`` holds the source's and the target's derived quantities."""
+    from . import __version__
+
+    job = resolved.job
+    src, tgt = job.source, job.target
+    active = resolved.target_spec.active(result.params)
+    v = result.verdict
+    return Report(
+        tool=f"brdf-remap {__version__}", engine=ENGINE_VERSION, key=job.key(), job=job,
+        source=SourceRecord(file=job.label, name=src.name, adapter=src.adapter, model=src.model,
+                            params=resolved.source_spec.active(resolved.source_params), derived=derived[0]),
+        target=TargetRecord(adapter=tgt.adapter, model=tgt.model), params=active, derived=derived[1],
+        fitted=list(result.fitted),
+        fixed=dict(resolved.fixed),
+        metrics=Metrics(relative_rmse=result.relative_rmse, perceptual=result.perceptual,
+                        noise_floor=result.noise_floor, noise_source=result.source_noise,
+                        noise_target=result.target_noise, threshold=result.threshold,
+                        jacobian_condition=_finite(result.jacobian_condition)),
+        start=Start(informed=bool(start), params=rounded(start)), renders=result.renders,
+        renders_by_resolution=renders_by_resolution, source_renders=source_renders, seconds=seconds,
+        scheme=result.scheme, scheme_used=result.scheme_used, verdict=v.status, findings=v.findings,
+        stages=result.stages, adapters=adapters,
+        host={"python": platform.python_version(), "machine": platform.machine()}, files=files)
+
+
+def _finite(x: float | None) -> float | None:
+    return x if x is not None and math.isfinite(x) else None
+
+
+def report_schema() -> dict[str, Any]:
+    """The JSON Schema of `result.json` as written (derived fields included)."""
+    return Report.model_json_schema(mode="serialization")
+
+
+def parse_report(doc: Any, file: str) -> Report:
+    """A report from its JSON document; a clear ConfigError for another version of the format."""
+    if not isinstance(doc, dict):
+        raise ConfigError("not a brdf-remap report (expected a JSON object)", file=file)
+    version = doc.get("schema_version")
+    if not isinstance(version, int):
+        raise ConfigError(f"written by an older brdf-remap (before report schema {SCHEMA_VERSION}): run the job again "
+                          "to replace it", file=file)
+    if version > SCHEMA_VERSION:
+        raise ConfigError(f"written by a newer brdf-remap (report schema {version}; this one reads "
+                          f"{SCHEMA_VERSION}): upgrade brdf-remap to read it", file=file)
+    if version < SCHEMA_VERSION:
+        raise ConfigError(f"written by an older brdf-remap (report schema {version}; this one reads "
+                          f"{SCHEMA_VERSION}): run the job again to replace it", file=file)
+    try:
+        return Report.model_validate(doc)
+    except ValidationError as exc:
+        field, msg = validation_message(exc)
+        raise ConfigError(msg, file=file, field=field) from exc
+
+
+def read_report(path: str | Path) -> Report:
+    p = Path(path)
+    try:
+        doc = json.loads(p.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ConfigError("file not found (check the path)", file=str(p)) from None
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise ConfigError(f"cannot read it as JSON: {exc}", file=str(p)) from None
+    return parse_report(doc, str(p))

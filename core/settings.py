@@ -1,0 +1,43 @@
+"""What a user chooses about how a remap runs. One model: the CLI flags, an experiment's
+`options:` and the benchmark scripts all build it, and its defaults exist only here."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+Scheme = Literal["auto", "one", "two", "three"]
+
+
+class Settings(BaseModel):
+    """The choices that shape a fit. Every field is part of a job's key."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    scheme: Scheme = Field("auto", description="auto: two-stage where the target's lobes divide its parameters, "
+                                                "else one-stage; one, two, three: the paper's schemes.")
+    starts: int = Field(4, ge=1, le=64, description="Starting points tried per stage; the best one starts the fit.")
+    coarse: int = Field(32, ge=0, le=4096, description="Resolution of the coarse level where most iterations run "
+                                                       "(used when the scene's is at least twice it; 0: none).")
+    start: Literal["informed", "defaults"] = Field(
+        "informed", description="First start: the exporters' conversion of the source (where both adapters read "
+                                "one), or the target model's defaults.")
+    precise_spp: int = Field(4, ge=1, le=64, description="A fit that ends at the render noise is polished at this "
+                                                         "many times the scene's samples (1: never).")
+    threshold: float = Field(0.05, gt=0, lt=10, description="Relative RMSE above which a result is not reliable.")
+    method: Literal["trf", "dogbox"] = Field("trf", description="scipy least-squares method; trf (Trust Region "
+                                                                 "Reflective, bounded) is the paper's.")
+    jacobian_updates: int = Field(8, ge=0, le=1000, description="Broyden updates of the Jacobian between rendered "
+                                                                "ones (0: a rendered one every iteration, as the "
+                                                                "paper).")
+
+    @field_validator("coarse")
+    @classmethod
+    def _coarse(cls, v: int) -> int:
+        if 0 < v < 8:
+            raise ValueError("must be 0 (off) or at least 8")
+        return v
+
+
+DEFAULTS = Settings()
