@@ -70,7 +70,7 @@ class FileRecord(_Strict):
 class Report(_Strict):
     """`result.json`: what one job produced and what it is worth."""
 
-    schema_version: int = Field(SCHEMA_VERSION, description="Version of this format.")
+    schema_version: int = Field(description="Version of this format (see `SCHEMA_VERSION`).")
     tool: str = Field(description="The program and version that wrote it.")
     engine: int = Field(description="Engine version (see core/engine/tuning.py).")
     key: str = Field(description="The job's key: equal keys, equal results.")
@@ -141,7 +141,7 @@ def build_report(resolved: Resolved, result: EngineResult, *, start: dict, deriv
     active = resolved.target_spec.active(result.params)
     v = result.verdict
     return Report(
-        tool=f"brdf-remap {__version__}", engine=ENGINE_VERSION, key=job.key(), job=job,
+        schema_version=SCHEMA_VERSION, tool=f"brdf-remap {__version__}", engine=ENGINE_VERSION, key=job.key(), job=job,
         source=SourceRecord(file=job.label, name=src.name, adapter=src.adapter, model=src.model,
                             params=resolved.source_spec.active(resolved.source_params), derived=derived[0]),
         target=TargetRecord(adapter=tgt.adapter, model=tgt.model), params=active, derived=derived[1],

@@ -6,6 +6,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "examples" / "brdfremap-example"))  # the example adapter package
+sys.path.insert(0, str(ROOT / "tests"))  # helpers shared by the tests (reports.py)
 
 
 def pytest_addoption(parser):

@@ -3,10 +3,16 @@ the shipped Fig. 5 and Fig. 6 experiments)."""
 
 import csv
 import json
+import os
+import signal
+import subprocess
+import sys
+import time
 
 import yaml
 
 from brdfremap.core.cli import main
+from reports import read_result
 
 CONDUCTORS = {
     "kind": "sweep", "name": "small Fig. 5",
@@ -26,6 +32,11 @@ def _write(tmp_path, doc, name="exp.yaml"):
 
 def _rows(out):
     return {r["point"]: r for r in csv.DictReader((out / "results.csv").open())}
+
+
+def _table(out):
+    """results.csv without the seconds columns (wall time differs between runs)."""
+    return [{k: v for k, v in r.items() if "seconds" not in k} for r in csv.DictReader((out / "results.csv").open())]
 
 
 def test_sweep_writes_csv_plots_and_flags_the_trimmed_point(tmp_path, mitsuba_adapter, capsys):
@@ -50,6 +61,9 @@ def test_sweep_writes_csv_plots_and_flags_the_trimmed_point(tmp_path, mitsuba_ad
     assert float(ag["source.reflectivity_r"]) > 0.95
     summary = json.loads((out / "summary.json").read_text())
     assert summary["points"] == 4 and summary["flagged"] >= 1 and summary["renders"] > 0
+    for p in sorted(rows):
+        read_result(out / "points" / p / "result.json")  # every report validates against `remap schema`
+    table = _table(out)
     first = capsys.readouterr().out
     assert "points         4" in first
 
@@ -59,14 +73,18 @@ def test_sweep_writes_csv_plots_and_flags_the_trimmed_point(tmp_path, mitsuba_ad
     assert "(4 remaps resumed" in again and "renders        0 target renders" in again
     assert _rows(out) == rows
 
-    # A point made by another version of the engine is redone, not reused.
+    # A point made by another version of the engine (another key) is redone, not reused; so is one
+    # whose report is of an older format, or whose image no longer matches it.
     doc_path = out / "points/00-002/result.json"
     doc = json.loads(doc_path.read_text())
     assert doc["engine"] and all("jacobians" in st for st in doc["stages"])
-    doc_path.write_text(json.dumps({**doc, "engine": "older"}))
+    doc_path.write_text(json.dumps({**doc, "key": "0" * 20}))
+    (out / "points/00-001/result.json").write_text(json.dumps({k: v for k, v in doc.items() if k != "schema_version"}))
+    (out / "points/00-000/target.exr").write_bytes(b"not the image")
     assert main(["sweep", str(path), "--out", str(out), "--quiet"]) == 0
     third = capsys.readouterr().out
-    assert "(3 remaps resumed" in third and "renders        0 target renders" not in third
+    assert "(1 remaps resumed" in third and "renders        0 target renders" not in third
+    assert _table(out) == table
 
 
 def test_a_changed_point_is_rerun_and_the_others_reused(tmp_path, mitsuba_adapter, capsys):
@@ -96,14 +114,56 @@ def test_roundtrip_recovers_the_reflectivity(tmp_path, mitsuba_adapter, capsys):
     assert "round trip     slope" in capsys.readouterr().out
 
 
+def test_local_processes_and_a_dask_cluster_give_the_same_table(tmp_path, mitsuba_adapter, capsys):
+    """The same sweep in this process, in two local worker processes (--jobs 2) and on a Dask
+    LocalCluster of two worker processes (--scheduler): the same fits, cell for cell."""
+    from distributed import LocalCluster
+
+    path = _write(tmp_path, CONDUCTORS)
+    assert main(["sweep", str(path), "--out", str(tmp_path / "inline"), "--quiet"]) == 0
+    assert main(["sweep", str(path), "--out", str(tmp_path / "pool"), "--quiet", "--jobs", "2"]) == 0
+    assert "in 2 local processes" in capsys.readouterr().out
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        assert main(["sweep", str(path), "--out", str(tmp_path / "dask"), "--quiet",
+                     "--scheduler", cluster.scheduler_address]) == 0
+    assert f"in dask at {cluster.scheduler_address} (2 threads)" in capsys.readouterr().out
+    inline = _table(tmp_path / "inline")
+    assert len(inline) == 4 and _table(tmp_path / "pool") == inline and _table(tmp_path / "dask") == inline
+    for d in ("pool", "dask"):
+        for p in sorted(os.listdir(tmp_path / d / "points")):
+            read_result(tmp_path / d / "points" / p / "result.json")
+
+
+def test_a_sweep_killed_with_kill_9_resumes_with_every_point_once(tmp_path, mitsuba_adapter):
+    """SIGKILL halfway (no handler runs, nothing is cleaned up): the rerun reuses every point that
+    was stored, runs only the others, and ends with each point once and complete."""
+    doc = dict(CONDUCTORS, sweep={"param": "material", "values": ["Au", "Cu", "Cr", "Ag", "Al", "Ni_palik", "W",
+                                                                  "Mo", "Ta", "Rh", "Ir", "Hg"]})
+    path, out = _write(tmp_path, doc), tmp_path / "out"
+    cmd = [sys.executable, "-m", "brdfremap.core.cli", "sweep", str(path), "--out", str(out), "--quiet"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 120
+    while not (out / "points/00-004/result.json").exists():
+        assert proc.poll() is None and time.time() < deadline, proc.communicate()
+        time.sleep(0.02)
+    proc.kill()
+    proc.communicate(timeout=60)
+    assert proc.returncode == -signal.SIGKILL
+    done = {p for p in os.listdir(out / "points") if (out / "points" / p / "result.json").exists()}
+    assert 5 <= len(done) < 12, done
+    rerun = subprocess.run(cmd[:-1], capture_output=True, text=True, timeout=300)  # with its progress lines
+    assert rerun.returncode == 0, rerun.stderr
+    assert f"({len(done)} remaps resumed" in rerun.stdout  # nothing done twice
+    ran = [line for line in rerun.stderr.splitlines() if line.startswith("[")]
+    assert sum("[resumed]" not in line for line in ran) == 12 - len(done)
+    assert len(_rows(out)) == 12
+    for p in os.listdir(out / "points"):
+        assert not [f for f in os.listdir(out / "points" / p) if f.startswith(".staging")]
+        read_result(out / "points" / p / "result.json")
+
+
 def test_an_interrupted_sweep_resumes(tmp_path, mitsuba_adapter):
     """Ctrl-C mid-sweep: exit 130 without a traceback; the rerun reuses the finished points."""
-    import os
-    import signal
-    import subprocess
-    import sys
-    import time
-
     doc = dict(CONDUCTORS, sweep={"param": "material", "values": ["Au", "Cu", "Cr", "Ag", "Al", "Ni_palik", "W",
                                                                   "Mo", "Ta", "Rh", "Ir", "Hg"]})
     path, out = _write(tmp_path, doc), tmp_path / "out"

@@ -5,12 +5,13 @@ import json
 import pytest
 
 from brdfremap.core.cli import main
+from reports import read_result
 
 
 def _run(tmp_path, root, material, *args):
     out = tmp_path / "out"
     assert main(["--source", str(root / "configs/materials" / material), "--out", str(out), "--quiet", *args]) == 0
-    return out, json.loads((out / "result.json").read_text())
+    return out, read_result(out / "result.json")
 
 
 @pytest.mark.parametrize("material, dist", [("copper.yaml", "beckmann"), ("copper-ggx.yaml", "ggx")])

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from brdfremap.core.cli import main
+from reports import read_result
 from brdfremap.core.imageio import read_image
 
 
@@ -13,7 +14,7 @@ def _run(tmp_path, root, material, *args):
     out = tmp_path / "out"
     code = main(["--source", str(root / "configs/materials" / material), "--out", str(out), "--quiet", *args])
     assert code == 0
-    return out, json.loads((out / "result.json").read_text())
+    return out, read_result(out / "result.json")
 
 
 def test_gold_beckmann_to_ggx_writes_the_contract(tmp_path, root, mitsuba_adapter):
@@ -74,7 +75,7 @@ def test_a_two_stage_result_off_the_full_image_minimum_is_refined_jointly(tmp_pa
     out = tmp_path / "out"
     assert main(["--source", str(mat), "--out", str(out), "--quiet", "--adapter", "mitsuba",
                  "--model", "roughplastic", "--fix", "distribution=ggx"]) == 0
-    r = json.loads((out / "result.json").read_text())
+    r = read_result(out / "result.json")
     assert r["scheme_used"] == "two"
     assert [s["name"] for s in r["stages"] if s["name"].startswith("joint")] == ["joint-refine", "joint-refine #2"]
     assert any("joint refinement took it from" in n and "in 2 rounds" in n for n in r["notes"])
@@ -121,3 +122,35 @@ def test_joint_rounds_that_do_not_realise_the_predicted_gain_leave_a_note_not_a_
     assert r.metrics.relative_rmse < 0.006
     assert "not at a minimum" not in r.reason and r.reliable, r.reason
     assert [f.kind for f in r.findings if f.kind == "prediction_not_realised"], r.notes
+
+
+def test_the_same_job_into_the_same_folder_is_reused_and_force_fits_again(tmp_path, root, mitsuba_adapter, capsys):
+    args = ["--adapter", "mitsuba", "--model", "roughconductor", "--fix", "distribution=ggx", "--resolution", "64"]
+    out, first = _run(tmp_path, root, "gold.yaml", *args)
+    capsys.readouterr()
+    _, again = _run(tmp_path, root, "gold.yaml", *args)
+    assert again == first and "the stored result of this same job" in capsys.readouterr().out
+    _, forced = _run(tmp_path, root, "gold.yaml", *args, "--force")
+    assert forced["params"] == first["params"] and forced["seconds"] != first["seconds"]
+    # Another job into the folder replaces the result, and the files it does not have go.
+    (out / "material.blend").write_bytes(b"from an earlier Cycles result")
+    doc = read_result(out / "result.json")
+    doc["files"].append({"name": "material.blend", "sha256": "0" * 64, "bytes": 29})
+    (out / "result.json").write_text(json.dumps(doc))
+    _, other = _run(tmp_path, root, "gold.yaml", *args[:-1], "48")
+    assert other["key"] != first["key"] and not (out / "material.blend").exists()
+
+
+def test_remap_render_writes_the_adapters_image(tmp_path, root, mitsuba_adapter):
+    from brdfremap.core.scene import ProbeScene
+
+    mat = root / "configs/materials/gold.yaml"
+    assert main(["render", str(mat), "--out", str(tmp_path / "g.exr"), "--resolution", "48", "--quiet"]) == 0
+    scene = ProbeScene(resolution=48)
+    want = mitsuba_adapter.render("roughconductor", mitsuba_adapter.models["roughconductor"].complete(
+        {"distribution": "beckmann", "material": "Au", "alpha": 0.1}), scene)
+    assert np.array_equal(read_image(tmp_path / "g.exr"), want)
+    assert main(["render", str(mat), "--out", str(tmp_path / "g.png"), "--resolution", "48", "--quiet"]) == 0
+    assert (tmp_path / "g.png").stat().st_size > 0
+    assert main(["render", str(mat), "--out", str(tmp_path / "g.jpg")]) == 2
+    assert main(["render", str(mat), "--out", str(tmp_path / "d.exr"), "--lobe", "diffuse", "--quiet"]) == 0
