@@ -1,6 +1,5 @@
 """`remap` across renderers with real Mitsuba and Cycles renders."""
 
-import json
 
 import pytest
 

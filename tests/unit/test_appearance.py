@@ -2,7 +2,6 @@
 reading and writing (pure functions, no renderer), and the session's use of it."""
 
 import math
-import types
 
 import numpy as np
 import pytest
@@ -11,16 +10,15 @@ from brdfremap.adapters.cycles import appearance as cycles
 from brdfremap.adapters.mitsuba import appearance as mitsuba
 from brdfremap.adapters.cycles.models import MODELS as CYCLES
 from brdfremap.adapters.mitsuba.models import MODELS as MITSUBA
-from brdfremap.core import hookimpl
 from brdfremap.core.appearance import (Appearance, conductor_f0, dielectric_f0, eta_k_from_reflectivity, ior_from_f0,
                                        reflectivity_edge_tint)
-from brdfremap.core.plugins import collect_adapters, get_plugin_manager
 from brdfremap.core.scene import ProbeScene
 from brdfremap.core.schemas import Material
 from brdfremap.core.execute import AdapterPool, execute, informed_start
 from brdfremap.core.job import Job, Target, resolve
 from brdfremap.core.settings import Settings
 from brdfremap_example.adapter import ToyAdapter
+from helpers import registry_of
 
 GOLD = ((0.143, 0.374, 1.442), (3.983, 2.385, 1.603))  # Mitsuba's Au preset in RGB, near enough
 
@@ -81,14 +79,7 @@ def test_a_model_without_a_reading_gives_none_and_no_conversion():
 
 
 def _toy_registry():
-    mod = types.ModuleType("toyplug")
-
-    @hookimpl
-    def brdfremap_register_adapters(register):
-        register("toy", ToyAdapter)
-
-    mod.brdfremap_register_adapters = brdfremap_register_adapters
-    return collect_adapters(get_plugin_manager(load_entrypoints=False, plugins=(mod,)))
+    return registry_of("toy", ToyAdapter)
 
 
 def _job(reg, src, scene, fix=None, **settings):
@@ -140,14 +131,7 @@ class _NoisyToy(ToyAdapter):
 def test_a_noise_limited_fit_is_polished_at_more_samples():
     """A fit that ends within a few times the render noise is polished at 4x the samples: the
     parameters land closer to the truth than the fit at the scene's samples leaves them."""
-    mod = types.ModuleType("noisyplug")
-
-    @hookimpl
-    def brdfremap_register_adapters(register):
-        register("toy", _NoisyToy)
-
-    mod.brdfremap_register_adapters = brdfremap_register_adapters
-    reg = collect_adapters(get_plugin_manager(load_entrypoints=False, plugins=(mod,)))
+    reg = registry_of("toy", _NoisyToy)
     truth = {"diffuse": [0.6, 0.3, 0.1], "specular": 0.8, "alpha": 0.15}
     src = Material(adapter="toy", model="toy", params=truth)
     scene = ProbeScene(resolution=48, spp=16)

@@ -1,36 +1,27 @@
 """The house: jobs and their keys, settings built once, the report's format and versions, the store."""
 
 import json
-import types
 
 import pytest
 
-from brdfremap.core import hookimpl
 from brdfremap.core.cli import main
 from brdfremap.core.errors import ConfigError
 from brdfremap.core.execute import AdapterPool, execute
 from brdfremap.core.job import Job, Target, resolve
-from brdfremap.core.plugins import collect_adapters, get_plugin_manager
 from brdfremap.core.report import SCHEMA_VERSION, Report, parse_report, read_report
 from brdfremap.core.scene import ProbeScene
 from brdfremap.core.schemas import Material
 from brdfremap.core.settings import DEFAULTS, Settings
 from brdfremap.core.store import Store, owned
 from brdfremap_example.adapter import ToyAdapter
+from helpers import registry_of
 
 SRC = Material(adapter="toy", model="toy", params={"diffuse": [0.6, 0.3, 0.1], "specular": 0.8, "alpha": 0.15})
 SCENE = ProbeScene(resolution=32)
 
 
 def _registry():
-    mod = types.ModuleType("toyplug")
-
-    @hookimpl
-    def brdfremap_register_adapters(register):
-        register("toy", ToyAdapter)
-
-    mod.brdfremap_register_adapters = brdfremap_register_adapters
-    return collect_adapters(get_plugin_manager(load_entrypoints=False, plugins=(mod,)))
+    return registry_of("toy", ToyAdapter)
 
 
 def _job(**changes):
