@@ -91,6 +91,8 @@ VARIANTS = {"default, starts from the defaults": dict(start="defaults"),
             "default, one joint round, 0.5-point trigger": dict(joint_rounds=1, joint_min_gain=0.005)}
 CACHED = ("paper", "floor")
 OLD_ENGINE = {"start": "defaults", "start_margin": 0.0}
+LEGACY, LEGACY_VALUES = {"coarse": "coarse_resolution"}, {("coarse", 0): None}
+"""Options by the names the cache's keys were first written with, so its rows stay valid."""
 """The paper's and the floor's fits start from the target's defaults as given (on a bound, if
 that is where a default lies), as they did when their rows were first cached."""
 CACHE_NOTE = (" Paper and floor rows come from the script's cache when it has them (a run of it with the same"
@@ -123,7 +125,8 @@ def run_case(reg, adapters, src, target, *, paper=True, variants=True, cache: Pa
             return
         # Options that reproduce the engine as it was before they existed stay out of the key, so the
         # rows cached before them remain valid (they were made exactly so).
-        keyed = {k: v for k, v in options.items() if (k, v) not in OLD_ENGINE.items()}
+        keyed = {LEGACY.get(k, k): LEGACY_VALUES.get((k, v), v) for k, v in options.items()
+                 if (k, v) not in OLD_ENGINE.items()}
         key = json.dumps([src.name, src.params, target, fix, label, scene.model_dump(), keyed], sort_keys=True)
         path = cache / f"{hashlib.sha256(key.encode()).hexdigest()[:20]}.json" if cache and label in CACHED else None
         if path is not None and path.exists():

@@ -1,7 +1,13 @@
 """brdf-remap core: the remap engine, metrics, schemas, plugin host and CLI. Knows no renderer."""
 
 from .appearance import Appearance
-from .errors import AdapterUnavailableError, ConfigError, OptimisationError, RemapError, RenderError
+from .errors import (
+    AdapterUnavailableError,
+    ConfigError,
+    OptimisationError,
+    RemapError,
+    RenderError,
+)
 from .hookspecs import hookimpl
 from .protocol import Adapter
 from .scene import ProbeScene

@@ -6,9 +6,11 @@ an executor calls, in this process or in a worker process or on a Dask worker: i
 
 from __future__ import annotations
 
+import atexit
 import hashlib
 import math
 import tempfile
+import threading
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -58,6 +60,9 @@ class AdapterPool:
 
 
 _POOL: AdapterPool | None = None
+_ONE_AT_A_TIME = threading.Lock()
+"""A process runs one job at a time: its adapters (a Mitsuba scene updated in place, a Blender
+worker) are shared by every job of the process."""
 
 
 @contextmanager
@@ -78,6 +83,7 @@ def _pool(renderer_files: tuple[str, ...]) -> AdapterPool:
     global _POOL
     if _POOL is None:
         _POOL = AdapterPool(collect_adapters())
+        atexit.register(_POOL.close)  # a worker process's renderers end with it
     for f in renderer_files:
         _POOL.registry.resolve(f)
     return _POOL
@@ -86,8 +92,9 @@ def _pool(renderer_files: tuple[str, ...]) -> AdapterPool:
 def run_job(job: Job, renderer_files: tuple[str, ...] = (), progress: ProgressFn | None = None) -> Outcome:
     """Run a job (already resolved once by the caller, so its errors were reported before any
     render) with this process's adapters."""
-    pool = _pool(tuple(renderer_files))
-    return execute(resolve(job, pool.registry), pool, progress)
+    with _ONE_AT_A_TIME:
+        pool = _pool(tuple(renderer_files))
+        return execute(resolve(job, pool.registry), pool, progress)
 
 
 def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | None = None) -> Outcome:

@@ -46,6 +46,8 @@ class Workers:
 def workers(jobs: int = 1, scheduler: str | None = None) -> Iterator[Workers]:
     if jobs < 1:
         raise ConfigError("must be at least 1", field="--jobs")
+    if scheduler and jobs > 1:
+        raise ConfigError("give --jobs or --scheduler, not both (a cluster's size is its workers')", field="--jobs")
     if scheduler:
         with _dask(scheduler) as w:
             yield w
@@ -72,8 +74,10 @@ def _dask(address: str) -> Iterator[Workers]:
     except (OSError, TimeoutError, ValueError) as exc:
         raise ConfigError(f"cannot reach the Dask scheduler: {exc}", field=f"--scheduler {address}") from None
     try:
-        threads = sum(client.nthreads().values())
-        yield Workers(client.get_executor(pure=False), max(threads, 1), f"dask at {address} ({threads} threads)")
+        # One job per worker process at a time (run_job holds a process lock): a renderer's state
+        # is per process, and two jobs in threads of one process would share it.
+        procs = len(client.nthreads())
+        yield Workers(client.get_executor(pure=False), max(procs, 1), f"dask at {address} ({procs} workers)")
     finally:
         client.close()
 

@@ -6,23 +6,17 @@ findings alone (`Verdict.of`), never from their text."""
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal, Union
+from typing import Annotated, Literal, Union
 
-from pydantic import BaseModel, ConfigDict, Field, computed_field, model_validator
+from pydantic import Field, computed_field
+
+from .model import Strict, WithDerived
 
 Severity = Literal["unreliable", "note"]
 
 
-class _Finding(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-    @model_validator(mode="before")
-    @classmethod
-    def _drop_derived(cls, data: Any) -> Any:
-        # A report read back carries the derived fields too; they are recomputed, not trusted.
-        if isinstance(data, dict):
-            return {k: v for k, v in data.items() if k not in ("severity", "message")}
-        return data
+class _Finding(WithDerived):
+    derived_fields = ("severity", "message")
 
     @computed_field  # type: ignore[prop-decorator]
     @property
@@ -182,11 +176,9 @@ Finding = Annotated[
 Status = Literal["ok", "mismatch", "unreliable"]
 
 
-class Verdict(BaseModel):
+class Verdict(Strict):
     """The findings, and what they add up to: ok (nothing unreliable), mismatch (only a model
     mismatch: the closest this target model gets) or unreliable."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
 
     status: Status
     findings: list[Finding] = Field(default_factory=list)

@@ -13,30 +13,27 @@ import json
 from dataclasses import dataclass
 from typing import Any
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
 
 from .engine.tuning import ENGINE_VERSION, Tuning
 from .errors import ConfigError
+from .model import Strict
 from .plugins import AdapterRegistry
 from .scene import ProbeScene
 from .schemas import Material, ModelSpec, Value
 from .settings import Settings
 
 
-class Target(BaseModel):
+class Target(Strict):
     """The target side of a job: an adapter's model, and parameters held fixed."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
 
     adapter: str = Field(description="Target adapter (see `remap adapters`).")
     model: str = Field(description="Material model of that adapter.")
     fix: dict[str, Any] = Field(default_factory=dict, description="Target parameters held at these values.")
 
 
-class Job(BaseModel):
+class Job(Strict):
     """A remap request, complete: what determines its result, and a label for people."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
 
     source: Material
     target: Target

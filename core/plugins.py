@@ -30,8 +30,14 @@ class AdapterEntry:
 
     @property
     def version(self) -> str:
-        """The adapter's own version (part of a job's key): bumped when its renders change."""
-        return str(getattr(self.factory, "version", "1"))
+        """What determines the adapter's renders (`Adapter.identity`): part of a job's key."""
+        identity = getattr(self.factory, "identity", None)
+        if identity is None:
+            return str(getattr(self.factory, "version", "1"))
+        try:
+            return str(identity())
+        except Exception as exc:  # a broken plugin is reported when it renders, not here
+            return f"{getattr(self.factory, 'version', '1')} (identity unknown: {type(exc).__name__})"
 
     def unavailable_reason(self) -> str | None:
         try:

@@ -47,6 +47,14 @@ class Adapter(abc.ABC):
         return [self.render(*r) for r in requests]
 
     @classmethod
+    def identity(cls) -> str:
+        """What determines this adapter's renders besides a job's inputs, as one string: its
+        `version`, and the renderer's version and configuration where those vary between
+        machines. Part of every job's key (a renderer upgraded, or a worker configured otherwise,
+        gets its results redone). Must be cheap: no renderer import."""
+        return cls.version
+
+    @classmethod
     def environment(cls) -> dict[str, Any]:
         """Facts for `remap adapters` without rendering (version, variant and why). May be slow-ish."""
         return {}

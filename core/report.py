@@ -10,7 +10,7 @@ import platform
 from pathlib import Path
 from typing import Any
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, computed_field, model_validator
+from pydantic import Field, ValidationError, computed_field
 
 from .configio import validation_message
 from .engine.results import EngineResult, StageResult
@@ -18,14 +18,16 @@ from .engine.tuning import ENGINE_VERSION
 from .errors import ConfigError
 from .findings import Finding, Status, Verdict
 from .job import Job, Resolved
+from .model import Strict as _Strict
+from .model import WithDerived
 from .renders import rounded
 
 SCHEMA_VERSION = 2
-"""Bump when a field is renamed, removed or changes meaning (adding one is compatible)."""
+"""Bump whenever the fields change (an older reader refuses a field it does not know)."""
 
 
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+class NewerReportError(ConfigError):
+    """A report written by a newer brdf-remap: not to be read, nor overwritten."""
 
 
 class SourceRecord(_Strict):
@@ -67,8 +69,10 @@ class FileRecord(_Strict):
     bytes: int
 
 
-class Report(_Strict):
+class Report(WithDerived):
     """`result.json`: what one job produced and what it is worth."""
+
+    derived_fields = ("reliable", "reason", "notes")
 
     schema_version: int = Field(description="Version of this format (see `SCHEMA_VERSION`).")
     tool: str = Field(description="The program and version that wrote it.")
@@ -99,13 +103,6 @@ class Report(_Strict):
                                                             "variant).")
     host: dict[str, str]
     files: list[FileRecord] = Field(description="The files of this result beside result.json, with their hashes.")
-
-    @model_validator(mode="before")
-    @classmethod
-    def _drop_derived(cls, data: Any) -> Any:
-        if isinstance(data, dict):
-            return {k: v for k, v in data.items() if k not in ("reliable", "reason", "notes")}
-        return data
 
     @computed_field  # type: ignore[prop-decorator]
     @property
@@ -176,7 +173,7 @@ def parse_report(doc: Any, file: str) -> Report:
         raise ConfigError(f"written by an older brdf-remap (before report schema {SCHEMA_VERSION}): run the job again "
                           "to replace it", file=file)
     if version > SCHEMA_VERSION:
-        raise ConfigError(f"written by a newer brdf-remap (report schema {version}; this one reads "
+        raise NewerReportError(f"written by a newer brdf-remap (report schema {version}; this one reads "
                           f"{SCHEMA_VERSION}): upgrade brdf-remap to read it", file=file)
     if version < SCHEMA_VERSION:
         raise ConfigError(f"written by an older brdf-remap (report schema {version}; this one reads "

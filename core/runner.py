@@ -1,7 +1,9 @@
 """The runner: many jobs, each stored as it finishes; the ones the store already has are skipped.
 
 Killed at any moment (Ctrl-C, `kill -9`), a rerun finds every finished job in the store and
-runs only the rest: nothing is lost and nothing is done twice."""
+runs only the rest: nothing is lost and nothing is done twice. A job that fails stops the
+submission of new ones; those already running are still collected and stored, then the error
+is raised."""
 
 from __future__ import annotations
 
@@ -13,7 +15,7 @@ from typing import Callable
 
 from . import interrupt
 from .engine import ProgressFn
-from .errors import RemapError, RenderError
+from .errors import ConfigError, RemapError, RenderError
 from .execute import run_job
 from .executors import Workers, worker_deaths
 from .job import Job
@@ -33,66 +35,78 @@ class Task:
 @dataclass(frozen=True)
 class Done:
     task: Task
-    report: Report | None
+    report: Report
     resumed: bool
-    error: str = ""
-    """Why the job failed (a renderer error), when it did."""
     redone: str = ""
-    """Why a stored result was not reused, when there was one."""
+    """Why a result the slot held was not reused, when it held one."""
 
 
 LineFn = Callable[[Done, int, int], str]
 """A progress line for a finished job: (done, its position among the finished, total)."""
 
+_Todo = tuple[int, Task, str]
+
 
 class Runner:
     def __init__(self, store: Store, workers: Workers, *, renderer_files: tuple[str, ...] = (),
                  line: LineFn | None = None, quiet: bool = False, render_progress: ProgressFn | None = None,
-                 stop_on_error: bool = True, reuse: bool = True):
-        """``render_progress``: per-render progress of a job run in this process. ``stop_on_error``:
-        a job that fails stops the run (else it is reported in its `Done`). ``reuse``: take a stored
-        result of the same job instead of running it."""
+                 reuse: bool = True):
+        """``render_progress``: per-render progress of a job run in this process. ``reuse``: take
+        a stored result of the same job instead of running it."""
         self.store, self.workers, self.renderer_files = store, workers, tuple(renderer_files)
-        self.line, self.quiet, self.render_progress = line, quiet, render_progress
-        self.stop_on_error, self.reuse = stop_on_error, reuse
+        self.line, self.quiet, self.render_progress, self.reuse = line, quiet, render_progress, reuse
 
     def run(self, tasks: list[Task]) -> list[Done]:
         found: dict[int, Done] = {}
-        todo: list[tuple[int, Task, str]] = []
+        todo: list[_Todo] = []
         for i, t in enumerate(tasks):
-            report, why = self.store.inspect(t.slot)
-            if self.reuse and report is not None and report.key == t.job.key():
-                found[i] = Done(t, report, resumed=True)
+            stored = self.store.inspect(t.slot)
+            if stored.newer:
+                raise ConfigError(f"{stored.problem}; nothing was overwritten (or remove that result to redo it)")
+            if self.reuse and stored.report is not None and stored.report.key == t.job.key():
+                found[i] = Done(t, stored.report, resumed=True)
             else:
-                todo.append((i, t, why or ("its inputs or the engine changed" if report is not None else "")))
+                why = stored.problem or ("its inputs, the engine or a renderer changed" if stored.report else "")
+                todo.append((i, t, why if self.reuse else ""))
         bar = _Bar(len(tasks), len(found), self.quiet, self.workers.where)
-        for i in sorted(found):
-            bar.finished(self._line(found[i], bar))
         try:
+            for i in sorted(found):
+                bar.finished(self._line(found[i], bar))
             self._run_todo(todo, found, bar)
         finally:
             bar.close()
         return [found[i] for i in range(len(tasks))]
 
-    def _run_todo(self, todo: list[tuple[int, Task, str]], found: dict[int, Done], bar: "_Bar") -> None:
-        queue = list(todo)
-        flight: dict[cf.Future, tuple[int, Task, str]] = {}
+    def _run_todo(self, todo: list[_Todo], found: dict[int, Done], bar: "_Bar") -> None:
+        queue, flight = list(todo), {}
+        failure: BaseException | None = None
         try:
             while queue or flight:
-                while queue and len(flight) < self.workers.capacity:
+                while failure is None and queue and len(flight) < self.workers.capacity:
                     i, t, why = queue.pop(0)
                     bar.current(t.title or t.slot)
-                    flight[self._submit(t)] = (i, t, why)
+                    try:
+                        flight[self._submit(t)] = (i, t, why)
+                    except worker_deaths() as exc:
+                        failure = RenderError(f"the worker pool broke ({exc}); rerun to go on where it stopped")
+                if not flight:
+                    break
                 ready, _ = cf.wait(list(flight), timeout=0.5, return_when=cf.FIRST_COMPLETED)
                 interrupt.check()  # a Ctrl-C a renderer swallowed still stops the run here
                 for fut in ready:
                     i, t, why = flight.pop(fut)
-                    found[i] = self._finish(fut, t, why)
+                    try:
+                        found[i] = self._finish(fut, t, why)
+                    except RemapError as exc:
+                        failure = failure or exc
+                        continue
                     bar.finished(self._line(found[i], bar))
         except BaseException:
             for fut in flight:
                 fut.cancel()
             raise
+        if failure is not None:
+            raise failure
 
     def _submit(self, t: Task) -> cf.Future:
         if self.workers.in_process:
@@ -102,15 +116,13 @@ class Runner:
     def _finish(self, fut: cf.Future, t: Task, why: str) -> Done:
         try:
             outcome = fut.result()
-        except RemapError as exc:
-            if self.stop_on_error:
-                raise
-            return Done(t, None, resumed=False, error=str(exc), redone=why)
         except worker_deaths() as exc:
-            err = RenderError(f"{t.title or t.slot}: the worker running it died ({exc})")
-            if self.stop_on_error:
-                raise err from None
-            return Done(t, None, resumed=False, error=str(err), redone=why)
+            raise RenderError(f"{t.title or t.slot}: the worker running it died ({exc})") from None
+        if outcome.report.key != t.job.key():
+            theirs = outcome.report.job
+            raise RenderError(f"{t.title or t.slot}: the worker ran another version of the job (engine "
+                              f"{outcome.report.engine}, adapters {theirs.versions}; here: {t.job.versions}): "
+                              "install the same brdf-remap and renderers on every worker")
         self.store.save(t.slot, outcome)
         return Done(t, outcome.report, resumed=False, redone=why)
 

@@ -5,11 +5,9 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import Field, field_validator
 
-
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+from .model import Strict as _Strict
 
 
 class Sphere(_Strict):
@@ -62,6 +60,12 @@ class ProbeScene(_Strict):
     @classmethod
     def _strip(cls, v: str) -> str:
         return v.strip()
+
+    def overridden(self, *, resolution: int | None = None, spp: int | None = None,
+                   seed: int | None = None) -> "ProbeScene":
+        """This scene with the given values replaced, validated (a ValidationError names the field)."""
+        given = {k: v for k, v in (("resolution", resolution), ("spp", spp), ("seed", seed)) if v is not None}
+        return ProbeScene.model_validate({**self.model_dump(), **given}) if given else self
 
     def with_(self, **changes) -> "ProbeScene":
         return self.model_copy(update={k: v for k, v in changes.items() if v is not None})

@@ -6,16 +6,13 @@ import math
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import Field, ValidationError, model_validator
 
 from .errors import ConfigError
+from .model import Strict as _Strict
 
 Value = float | tuple[float, float, float] | str
 LOBES = ("diffuse", "specular")
-
-
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
 
 
 class ParamSpec(_Strict):

@@ -5,15 +5,15 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import Field, field_validator
+
+from .model import Strict
 
 Scheme = Literal["auto", "one", "two", "three"]
 
 
-class Settings(BaseModel):
+class Settings(Strict):
     """The choices that shape a fit. Every field is part of a job's key."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
 
     scheme: Scheme = Field("auto", description="auto: two-stage where the target's lobes divide its parameters, "
                                                 "else one-stage; one, two, three: the paper's schemes.")

@@ -16,12 +16,13 @@ import os
 import shutil
 import tempfile
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator
 
 from .errors import ConfigError
 from .execute import Outcome
-from .report import Report, read_report
+from .report import NewerReportError, Report, read_report
 
 RESULT = "result.json"
 STAGING = ".staging-"
@@ -67,6 +68,17 @@ def owned(path: str | Path, flag: str = "--out") -> Iterator[Path]:
         os.close(fd)
 
 
+@dataclass(frozen=True)
+class Stored:
+    """What a slot holds: a complete result, or why what is there cannot be used."""
+
+    report: Report | None = None
+    problem: str = ""
+    """Why a result that is there cannot be used ("" when there is none, or it is whole)."""
+    newer: bool = False
+    """Written by a newer brdf-remap: neither read nor overwritten."""
+
+
 class Store:
     """Results under ``root``, one slot (a relative folder name; "" for ``root`` itself) per job."""
 
@@ -76,22 +88,25 @@ class Store:
     def folder(self, slot: str) -> Path:
         return self.root / slot if slot else self.root
 
-    def inspect(self, slot: str) -> tuple[Report | None, str]:
-        """The slot's complete result, or None and why not ("" when there is none at all)."""
+    def inspect(self, slot: str) -> Stored:
+        """The slot's complete result, or why what is there cannot be used."""
         folder = self.folder(slot)
         if not (folder / RESULT).exists():
-            return None, ""
+            return Stored()
         try:
             report = read_report(folder / RESULT)
+        except NewerReportError as exc:
+            return Stored(problem=str(exc), newer=True)
         except ConfigError as exc:
-            return None, str(exc)
+            return Stored(problem=str(exc))
         for f in report.files:
             if not _matches(folder / f.name, f.sha256, f.bytes):
-                return None, f"{folder / f.name} is missing or does not match its result.json"
-        return report, ""
+                return Stored(problem=f"{folder / f.name} is missing or does not match its result.json")
+        return Stored(report)
 
     def find(self, slot: str, key: str) -> Report | None:
-        report, _ = self.inspect(slot)
+        """The slot's result if it is whole and of the job with this key."""
+        report = self.inspect(slot).report
         return report if report is not None and report.key == key else None
 
     def save(self, slot: str, outcome: Outcome) -> list[Path]:
@@ -113,12 +128,16 @@ class Store:
         for name, data in [*outcome.files.items(), (RESULT, doc.encode())]:
             _write(staging / name, data, folder / name)
         previous = _listed_files(folder)
-        (folder / RESULT).unlink(missing_ok=True)  # the old result must not vouch for what follows
-        for name in outcome.files:
-            os.replace(staging / name, folder / name)
-        for name in previous - set(outcome.files):
-            (folder / name).unlink(missing_ok=True)  # a file of the old result this one has not
-        os.replace(staging / RESULT, folder / RESULT)
+        try:
+            (folder / RESULT).unlink(missing_ok=True)  # the old result must not vouch for what follows
+            for name in outcome.files:
+                os.replace(staging / name, folder / name)
+            for name in previous - set(outcome.files):
+                (folder / name).unlink(missing_ok=True)  # a file of the old result this one has not
+            os.replace(staging / RESULT, folder / RESULT)
+        except OSError as exc:
+            raise ConfigError(f"cannot move the result into place: {_why(exc)} (rerun to redo it)",
+                              file=str(folder)) from None
         return [folder / n for n in outcome.files] + [folder / RESULT]
 
 
@@ -129,7 +148,8 @@ def _write(path: Path, data: bytes, shown: Path) -> None:
             f.flush()
             os.fsync(f.fileno())
     except OSError as exc:
-        raise ConfigError(f"cannot write: {_why(exc)} (the previous result, if any, is kept)", file=str(shown)) from None
+        raise ConfigError(f"cannot write: {_why(exc)} (the previous result, if any, is kept)",
+                          file=str(shown)) from None
 
 
 def _listed_files(folder: Path) -> set[str]:

@@ -113,6 +113,12 @@ class CyclesAdapter(Adapter):
         return None
 
     @classmethod
+    def identity(cls) -> str:
+        import importlib.metadata
+
+        return f"{cls.version} bpy-{importlib.metadata.version('bpy')}"
+
+    @classmethod
     def environment(cls) -> dict[str, Any]:
         import importlib.metadata
 

@@ -182,6 +182,13 @@ class MitsubaAdapter(Adapter):
 
         return {"renderer": f"Mitsuba {importlib.metadata.version('mitsuba')}", **as_dict(choose_variant())}
 
+    @classmethod
+    def identity(cls) -> str:
+        import importlib.metadata
+
+        v = importlib.metadata.version
+        return f"{cls.version} mitsuba-{v('mitsuba')} drjit-{v('drjit')} {choose_variant().variant}"
+
     def describe(self) -> dict[str, Any]:
         return {"renderer": f"Mitsuba {self.mi.__version__}", **as_dict(self.choice)}
 

@@ -24,6 +24,7 @@ def parser(kind: str) -> argparse.ArgumentParser:
 
 
 def run(kind: str, args: argparse.Namespace) -> int:
+    from ..execute import adapter_pool
     from ..executors import workers
     from ..experiments import load_experiment, run_experiment
     from ..plugins import collect_adapters
@@ -33,7 +34,7 @@ def run(kind: str, args: argparse.Namespace) -> int:
         raise ConfigError(f"is a {exp.kind} experiment: run it with `remap {exp.kind}`", file=args.experiment,
                           field="kind")
     registry = collect_adapters()
-    with workers(args.jobs, args.scheduler) as w:
+    with workers(args.jobs, args.scheduler) as w, adapter_pool(registry):
         r = run_experiment(exp, args.experiment, args.out, registry, w, quiet=args.quiet)
     _print(r, args.out)
     return 0

@@ -54,10 +54,8 @@ def add_scene(p: argparse.ArgumentParser) -> None:
 
 def scene_from(args: argparse.Namespace) -> ProbeScene:
     scene = load_scene(args.scene) if args.scene else ProbeScene()
-    overrides = {k: v for k, v in (("resolution", args.resolution), ("spp", args.spp), ("seed", args.seed))
-                 if v is not None}
     try:
-        return ProbeScene.model_validate({**scene.model_dump(), **overrides})
+        return scene.overridden(resolution=args.resolution, spp=args.spp, seed=args.seed)
     except ValidationError as exc:
         field, msg = validation_message(exc)
         raise ConfigError(msg, field=f"--{field}") from None

@@ -50,6 +50,7 @@ def parser() -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..execute import adapter_pool
     from ..executors import workers
     from ..job import Job, Target, Where, model_of, resolve
     from ..plugins import collect_adapters
@@ -77,10 +78,12 @@ def run(args: argparse.Namespace) -> int:
         print(f"remap {source.adapter}:{source.model} -> {adapter}:{args.model}  ({scene.resolution}x"
               f"{scene.resolution}, {scene.spp} spp, scheme {settings.scheme}; fitting "
               f"{', '.join(resolved.free) or 'nothing'})", file=sys.stderr, flush=True)
-    with owned(args.out) as folder, workers() as w:
+    with owned(args.out) as folder, workers() as w, adapter_pool(registry):
         runner = Runner(Store(folder), w, renderer_files=tuple(registry.loaded_files()), quiet=True,
                         render_progress=RenderProgress(not args.quiet), reuse=not args.force)
         (done,) = runner.run([Task("", resolved.job, str(args.source))])
+    if done.redone and not args.quiet:
+        print(f"note: the result that was in {folder} was replaced: {done.redone}", file=sys.stderr)
     _print(done.report, folder, resumed=done.resumed)
     return 0
 

@@ -95,6 +95,8 @@ def render(args: argparse.Namespace) -> int:
     params = spec.complete(material.params, file=args.material)
     if args.lobe and args.lobe not in spec.lobes:
         raise ConfigError(f"model {spec.name!r} cannot render its lobes alone", field="--lobe")
+    if args.lobe and spec.lobes[args.lobe].empty:
+        raise ConfigError(f"model {spec.name!r} has no {args.lobe} lobe (it would render black)", field="--lobe")
     t0 = time.perf_counter()
     adapter = registry.create(material.adapter)
     try:

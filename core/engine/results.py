@@ -6,19 +6,18 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
 
 from ..findings import Verdict
+from ..model import Strict
 from ..schemas import Value
 
 StageStatus = Literal["converged", "below_noise", "polished", "budget", "stopped"]
 CONVERGED: frozenset[str] = frozenset({"converged", "below_noise", "polished"})
 
 
-class StageResult(BaseModel):
+class StageResult(Strict):
     """One least-squares fit of the schedule."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
 
     name: str = Field(description="Stage and level, e.g. 'specular@32px', 'all', 'precise@64spp'.")
     lobe: str | None = Field(description="The source lobe matched, or None for the full image.")

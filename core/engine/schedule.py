@@ -64,6 +64,10 @@ class _Run:
         return self.fresh(name, lobe, budget=budget, starts=1, start_margin=0.0, rescale_starts=False,
                           extend_while_gaining=True, budget_converges=True, origin=origin)
 
+    def polish_budget(self, space: ParamSpace) -> int:
+        """A polish's renders: its start, one Jacobian, and a few steps."""
+        return 1 + space.jacobian_renders(self.tuning.separable_rgb) + self.tuning.fine_steps
+
     def assess(self, state: "_State") -> Assessment:
         return assess(self.target, state.params, self.free, self.fine, self.tuning, self.tally,
                       jacobian_updates=self.settings.jacobian_updates, seed=state.last, held=state.held,
@@ -89,7 +93,8 @@ class _State:
 
 
 def remap(target: ModelSpec, base: dict[str, Value], free: list[str], renders: Renders,
-          settings: Settings = Settings(), tuning: Tuning = Tuning(), progress: ProgressFn | None = None) -> EngineResult:
+          settings: Settings = Settings(), tuning: Tuning = Tuning(),
+          progress: ProgressFn | None = None) -> EngineResult:
     """Fit ``free`` parameters of ``target`` (the others as in ``base``) so that the target's render
     matches the source's, both as ``renders`` gives them at its scene."""
     t0 = time.perf_counter()
@@ -98,9 +103,9 @@ def remap(target: ModelSpec, base: dict[str, Value], free: list[str], renders: R
     run.notes += plan.findings
     state = _fit_stages(run, plan, dict(base))
     assessment = run.assess(state)
-    state, assessment, trust = _refine_jointly(run, plan, state, assessment)
+    state, assessment, joint = _refine_jointly(run, plan, state, assessment)
     state, assessment = _polish_noise_limited(run, state, assessment)
-    return _conclude(run, plan, state, assessment, trust, t0)
+    return _conclude(run, plan, state, assessment, joint, t0)
 
 
 def _setup(target: ModelSpec, free: list[str], renders: Renders, settings: Settings, tuning: Tuning,
@@ -154,8 +159,7 @@ def _fit_stages(run: _Run, plan: Plan, params: dict[str, Value]) -> _State:
                 last, held = None, {}
                 continue
             space = ParamSpace(run.target, params, polish_free)
-            budget = 1 + space.jacobian_renders(run.tuning.separable_rgb) + run.tuning.fine_steps
-            config = run.polish(planned.name + run.fine_suffix, planned.lobe, budget)
+            config = run.polish(planned.name + run.fine_suffix, planned.lobe, run.polish_budget(space))
         stage = run.stage(config, space, run.fine, planned.source)
         params = space.decode(stage.run(space.encode(params)))
         run.stages.append(stage.result.model_copy(update={"held": {k: v.why for k, v in settle.items()}}))
@@ -174,14 +178,29 @@ def _coarse_fit(run: _Run, planned: PlannedStage, space: ParamSpace,
     return params, stage
 
 
-def _refine_jointly(run: _Run, plan: Plan, state: _State, assessment: Assessment) -> tuple[_State, Assessment, bool]:
+@dataclass(frozen=True)
+class _Joint:
+    """What the joint rounds did: how many, the error before and after them, the first prediction."""
+
+    rounds: int = 0
+    before: float = 0.0
+    after: float = 0.0
+    predicted: float = 0.0
+
+    def realised(self, predicted_now: float | None) -> bool:
+        """Whether a joint step's prediction can be trusted here: rounds that realised under a
+        quarter of the gain first predicted show that its linear model does not hold (render
+        noise or curvature)."""
+        return not (self.rounds and predicted_now is not None
+                    and self.before - self.after < 0.25 * (self.before - self.predicted))
+
+
+def _refine_jointly(run: _Run, plan: Plan, state: _State, assessment: Assessment) -> tuple[_State, Assessment, _Joint]:
     """The merged lobes are provably not a minimum of the full image (a coupling the split cannot
     see, e.g. a little Metallic standing in for Specular): refine jointly from here, again while
-    a round ends with a joint step still predicting a gain. Returns whether the prediction is to
-    be trusted: rounds that realise under a quarter of the gain first predicted show that the
-    step's linear model does not hold here (render noise or curvature)."""
+    a round ends with a joint step still predicting a gain."""
     if plan.scheme == "one" or len(plan.stages) < 2:
-        return state, assessment, True
+        return state, assessment, _Joint()
     rounds, err0, predicted0 = 0, state.err, assessment.predicted
     while assessment.predicted is not None and rounds < run.tuning.joint_rounds:
         rounds += 1
@@ -201,11 +220,7 @@ def _refine_jointly(run: _Run, plan: Plan, state: _State, assessment: Assessment
         assessment = run.assess(state)
     if rounds and state.err < err0:
         run.notes.append(JointRefined(before=err0, after=state.err, rounds=rounds))
-    if rounds and assessment.predicted is not None and err0 - state.err < 0.25 * (err0 - predicted0):
-        run.notes.append(PredictionNotRealised(predicted_now=assessment.predicted, rounds=rounds, before=err0,
-                                               after=state.err, predicted_first=predicted0))
-        return state, assessment, False
-    return state, assessment, True
+    return state, assessment, _Joint(rounds, err0, state.err, predicted0 or 0.0)
 
 
 def _polish_noise_limited(run: _Run, state: _State, assessment: Assessment) -> tuple[_State, Assessment]:
@@ -218,9 +233,8 @@ def _polish_noise_limited(run: _Run, state: _State, assessment: Assessment) -> t
         return state, assessment
     level = run.renders.level(scene.with_(spp=scene.spp * k), lobes=False)
     space = ParamSpace(run.target, state.params, run.free)
-    budget = 1 + space.jacobian_renders(run.tuning.separable_rgb) + run.tuning.fine_steps
-    config = run.fresh(f"precise@{scene.spp * k}spp", None, budget=budget, starts=1, start_margin=0.0,
-                       good_enough=0.0, budget_converges=True, origin="the fit")
+    config = run.fresh(f"precise@{scene.spp * k}spp", None, budget=run.polish_budget(space), starts=1,
+                       start_margin=0.0, good_enough=0.0, budget_converges=True, origin="the fit")
     stage = run.stage(config, space, level, None)
     params = space.decode(stage.run(space.encode(state.params)))
     kept = stage.result.error < stage.result.start_error
@@ -234,7 +248,12 @@ def _polish_noise_limited(run: _Run, state: _State, assessment: Assessment) -> t
     return state, run.assess(state)
 
 
-def _conclude(run: _Run, plan: Plan, state: _State, assessment: Assessment, trust: bool, t0: float) -> EngineResult:
+def _conclude(run: _Run, plan: Plan, state: _State, assessment: Assessment, joint: _Joint, t0: float) -> EngineResult:
+    trust = joint.realised(assessment.predicted)
+    if not trust:
+        run.notes.append(PredictionNotRealised(predicted_now=assessment.predicted, rounds=joint.rounds,
+                                               before=joint.before, after=joint.after,
+                                               predicted_first=joint.predicted))
     target_noise = run.renders.target_noise(state.params)
     evidence = Evidence(error=state.err, threshold=run.threshold, assessment=assessment, stages=run.stages,
                         cond_limit=run.tuning.cond_limit, renderer_notes=run.renders.notes(state.params),

@@ -3,17 +3,19 @@
 
 from __future__ import annotations
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
+
+from ..model import Strict
 
 ENGINE_VERSION = 2
-"""Bump whenever a change to the engine would change a result. A stored result is reused (a
-resumed sweep, a library rerun) only when its job key, which includes this number, matches."""
+"""Bump whenever a change in core/ would change a result: the engine, but also the informed start
+(execute.py, appearance.py), the renders' cache and rounding (renders.py) or the metrics. A stored
+result is reused (a resumed sweep, a library rerun) only when its job key, which includes this
+number, matches. (An adapter's own `version` covers its renders.)"""
 
 
-class Tuning(BaseModel):
+class Tuning(Strict):
     """How the engine fits, below the level of `Settings`. Defaults are the measured best."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
 
     fd_step: float = Field(0.01, gt=0, lt=0.5, description="Forward-difference step in normalised parameter units.")
     polish_resolution: int | None = Field(
@@ -44,5 +46,5 @@ class Tuning(BaseModel):
                                                            "relative RMSE.")
     noise_threshold_factor: float = Field(2.0, ge=0, description="The error threshold is at least this many times the "
                                                                   "source's render noise.")
-    noise_stop_fraction: float = Field(1 / 3, ge=0, description="A fit stops once its error falls to this fraction "
-                                                                "of the source's render noise (below, steps fit noise).")
+    noise_stop_fraction: float = Field(1 / 3, ge=0, description="A fit stops once its error falls to this "
+                                                                "fraction of the source's render noise.")

@@ -4,8 +4,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..findings import (DeadParameters, ErrorAboveThreshold, IllConditioned, ModelMismatch, NoEffect, NotAtMinimum,
-                        PinnedOnBound, RendererAlters, Verdict)
+from ..findings import (
+    DeadParameters,
+    ErrorAboveThreshold,
+    IllConditioned,
+    ModelMismatch,
+    NoEffect,
+    NotAtMinimum,
+    PinnedOnBound,
+    RendererAlters,
+    Verdict,
+)
 from .assess import Assessment
 from .results import StageResult
 
@@ -41,5 +50,5 @@ def judge(ev: Evidence, notes: list) -> Verdict:
             and all(s.converged for s in ev.stages)):
         problems = [ModelMismatch(error=ev.error, threshold=ev.threshold)]
     problems += [RendererAlters(detail=n) for n in ev.renderer_notes]
-    extra = [DeadParameters(parameters=list(a.dead))] if a.dead else []
+    extra = [DeadParameters(parameters=list(a.dead))] if a.dead and not a.no_effect else []
     return Verdict.of(problems + list(notes) + extra)

@@ -105,8 +105,7 @@ def _write_outputs(folder: Path, exp: Experiment, rows: list[Row], cliffs: list[
 
 
 def _line(exp: Experiment, d: Done, i: int, n: int) -> str:
-    if d.report is None:
-        return f"[{i}/{n}] {d.task.title}: failed: {d.error}"
     r = d.report
     return (f"[{i}/{n}] {d.task.title}: {r.metrics.relative_rmse:.2%}, {r.renders} renders, {r.seconds:.2f} s"
-            + ("" if r.reliable else " (unreliable)") + (" [resumed]" if d.resumed else ""))
+            + ("" if r.reliable else " (unreliable)") + (" [resumed]" if d.resumed else "")
+            + (f" (redone: {d.redone})" if d.redone else ""))

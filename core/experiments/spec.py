@@ -7,18 +7,15 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import Field, model_validator
 
 from ..configio import load_yaml_model
 from ..job import Target
+from ..model import Strict as _Strict
 from ..scene import ProbeScene, load_scene
 from ..settings import Settings
 
 MAX_POINTS = 100_000
-
-
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
 
 
 class Range(_Strict):
@@ -70,9 +67,7 @@ class SceneSpec(_Strict):
         if self.file:
             path = Path(self.file)
             scene = load_scene(path if path.is_absolute() or path.exists() else base_dir / path)
-        overrides = {k: v for k, v in (("resolution", self.resolution), ("spp", self.spp), ("seed", self.seed))
-                     if v is not None}
-        return ProbeScene.model_validate({**scene.model_dump(), **overrides}) if overrides else scene
+        return scene.overridden(resolution=self.resolution, spp=self.spp, seed=self.seed)
 
 
 class PlotSpec(_Strict):

@@ -126,7 +126,7 @@ def test_local_processes_and_a_dask_cluster_give_the_same_table(tmp_path, mitsub
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
         assert main(["sweep", str(path), "--out", str(tmp_path / "dask"), "--quiet",
                      "--scheduler", cluster.scheduler_address]) == 0
-    assert f"in dask at {cluster.scheduler_address} (2 threads)" in capsys.readouterr().out
+    assert f"in dask at {cluster.scheduler_address} (2 workers)" in capsys.readouterr().out
     inline = _table(tmp_path / "inline")
     assert len(inline) == 4 and _table(tmp_path / "pool") == inline and _table(tmp_path / "dask") == inline
     for d in ("pool", "dask"):

@@ -153,4 +153,5 @@ def test_remap_render_writes_the_adapters_image(tmp_path, root, mitsuba_adapter)
     assert main(["render", str(mat), "--out", str(tmp_path / "g.png"), "--resolution", "48", "--quiet"]) == 0
     assert (tmp_path / "g.png").stat().st_size > 0
     assert main(["render", str(mat), "--out", str(tmp_path / "g.jpg")]) == 2
-    assert main(["render", str(mat), "--out", str(tmp_path / "d.exr"), "--lobe", "diffuse", "--quiet"]) == 0
+    assert main(["render", str(mat), "--out", str(tmp_path / "d.exr"), "--lobe", "diffuse", "--quiet"]) == 2  # no such lobe
+    assert main(["render", str(mat), "--out", str(tmp_path / "s.exr"), "--lobe", "specular", "--quiet"]) == 0

@@ -109,8 +109,8 @@ def test_the_store_keeps_a_result_whole_and_finds_it_by_key(tmp_path):
     store.save("a", out)  # a file the previous result listed and this one has not is removed
     assert not (tmp_path / "s/a/stale.txt").exists()
     (tmp_path / "s/a/target.exr").write_bytes(b"x")
-    report, why = store.inspect("a")
-    assert report is None and "target.exr is missing or does not match" in why
+    stored = store.inspect("a")
+    assert stored.report is None and "target.exr is missing or does not match" in stored.problem
     assert not list((tmp_path / "s/a").glob(".staging-*"))
 
 
