@@ -9,10 +9,22 @@ from pathlib import Path
 from typing import Any
 
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+_MODE = 0o666 & ~_umask()
+"""What a file created with open() would get: results are meant to be shared (mkstemp gives 0600)."""
+
+
 def temp_beside(path: Path) -> Path:
-    """A fresh temporary file in the same folder (so os.replace is atomic), same suffix."""
+    """A fresh temporary file in the same folder (so os.replace is atomic), same suffix, with the
+    permissions the umask gives a new file."""
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+    os.fchmod(fd, _MODE)
     os.close(fd)
     return Path(tmp)
 

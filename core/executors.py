@@ -6,11 +6,15 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import multiprocessing
+import os
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator
 
 from .errors import ConfigError
+
+
+MAX_JOBS = 256
 
 
 class InlineExecutor(cf.Executor):
@@ -44,8 +48,9 @@ class Workers:
 
 @contextmanager
 def workers(jobs: int = 1, scheduler: str | None = None) -> Iterator[Workers]:
-    if jobs < 1:
-        raise ConfigError("must be at least 1", field="--jobs")
+    if not 1 <= jobs <= MAX_JOBS:
+        raise ConfigError(f"must be from 1 to {MAX_JOBS} (each job is a process with its own renderers)",
+                          field="--jobs")
     if scheduler and jobs > 1:
         raise ConfigError("give --jobs or --scheduler, not both (a cluster's size is its workers')", field="--jobs")
     if scheduler:
@@ -54,11 +59,14 @@ def workers(jobs: int = 1, scheduler: str | None = None) -> Iterator[Workers]:
     elif jobs > 1:
         # spawn: a fresh interpreter per worker; forking a process that holds a renderer's
         # threads and native state is not safe.
-        pool = cf.ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"))
+        pool = cf.ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"),
+                                      initializer=_watch_parent, initargs=(os.getpid(),))
         try:
-            yield Workers(pool, jobs, f"{jobs} local processes")
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)
+            yield Workers(pool, jobs, f"up to {jobs} local processes")
+        except BaseException:
+            pool.shutdown(wait=False, cancel_futures=True)  # the workers see this process go and stop
+            raise
+        pool.shutdown(wait=True)
     else:
         yield Workers(InlineExecutor(), 1, "this process")
 
@@ -69,10 +77,14 @@ def _dask(address: str) -> Iterator[Workers]:
         from distributed import Client
     except ImportError:
         raise ConfigError("needs dask.distributed: pip install 'distributed'", field="--scheduler") from None
+    _probe(address)
     try:
         client = Client(address, timeout="20s")
     except (OSError, TimeoutError, ValueError) as exc:
         raise ConfigError(f"cannot reach the Dask scheduler: {exc}", field=f"--scheduler {address}") from None
+    except Exception as exc:  # a service that is not Dask can make its protocol fail in any way
+        raise ConfigError(f"the service there does not speak Dask's protocol ({type(exc).__name__})",
+                          field=f"--scheduler {address}") from None
     try:
         # One job per worker process at a time (run_job holds a process lock): a renderer's state
         # is per process, and two jobs in threads of one process would share it.
@@ -80,6 +92,50 @@ def _dask(address: str) -> Iterator[Workers]:
         yield Workers(client.get_executor(pure=False), max(procs, 1), f"dask at {address} ({procs} workers)")
     finally:
         client.close()
+
+
+def _watch_parent(parent: int) -> None:
+    """In a pool worker: exit when the process that started it is gone (a `kill -9` of remap
+    leaves no worker behind holding a renderer and its memory)."""
+    import threading
+    import time
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(1.0)
+        os._exit(1)
+
+    threading.Thread(target=watch, daemon=True, name="brdfremap-parent-watch").start()
+
+
+def _probe(address: str, timeout: float = 10.0) -> None:
+    """A TCP scheduler address must take a connection and greet first, as a Dask scheduler does
+    (its handshake): a mistyped port on a web server would otherwise hang the client."""
+    import socket
+    from urllib.parse import urlsplit
+
+    parts = urlsplit(address if "://" in address else f"tcp://{address}")
+    if parts.scheme != "tcp":
+        return
+    field = f"--scheduler {address}"
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        raise ConfigError("expected tcp://HOST:PORT (the scheduler's address, e.g. tcp://10.0.0.5:8786)",
+                          field=field) from None
+    if not host or not port:
+        raise ConfigError("expected tcp://HOST:PORT (the scheduler's address, e.g. tcp://10.0.0.5:8786)", field=field)
+    try:
+        with socket.create_connection((host, port), timeout=timeout) as s:
+            s.settimeout(timeout)
+            greeting = s.recv(16)
+    except socket.timeout:
+        raise ConfigError(f"something answers there but says nothing within {timeout:.0f} s: not a Dask scheduler "
+                          "(check the port: a scheduler listens on 8786 by default)", field=field) from None
+    except OSError as exc:
+        raise ConfigError(f"cannot reach the Dask scheduler: {exc.strerror or exc}", field=field) from None
+    if not greeting:
+        raise ConfigError("the service there closed the connection: not a Dask scheduler", field=field)
 
 
 def worker_deaths() -> tuple[type[BaseException], ...]:

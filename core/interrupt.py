@@ -12,8 +12,12 @@ import threading
 _requested = threading.Event()
 
 
+class Terminated(BaseException):
+    """SIGTERM: stop as Ctrl-C does (finished work is kept), and exit 143."""
+
+
 def install() -> None:
-    """Route SIGINT through the remembering handler (main thread only; elsewhere a no-op)."""
+    """Route SIGINT (and SIGTERM) through the remembering handler (main thread only; elsewhere a no-op)."""
     if threading.current_thread() is not threading.main_thread():
         return
     _requested.clear()
@@ -22,7 +26,12 @@ def install() -> None:
         _requested.set()
         raise KeyboardInterrupt
 
+    def terminate(signum, frame):
+        _requested.set()
+        raise Terminated
+
     signal.signal(signal.SIGINT, handler)
+    signal.signal(signal.SIGTERM, terminate)
 
 
 def check() -> None:

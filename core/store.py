@@ -60,12 +60,32 @@ def owned(path: str | Path, flag: str = "--out") -> Iterator[Path]:
         except BlockingIOError:
             raise ConfigError("another brdf-remap run is writing this folder; wait for it to finish or choose "
                               "another one", field=f"{flag} {folder}") from None
+        _check_parents(folder, flag)
         os.ftruncate(fd, 0)
         os.write(fd, f"{os.getpid()}\n".encode())
         _remove_staging(folder)
         yield folder
     finally:
         os.close(fd)
+
+
+def _check_parents(folder: Path, flag: str) -> None:
+    """A folder inside one another run owns (a sweep's point) is that run's to write."""
+    for parent in folder.resolve().parents:
+        lock = parent / LOCK
+        if not lock.is_file():
+            continue
+        try:
+            fd = os.open(lock, os.O_RDONLY)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise ConfigError(f"is inside {parent}, which another brdf-remap run is writing; wait for it to finish "
+                              "or choose a folder outside it", field=f"{flag} {folder}") from None
+        finally:
+            os.close(fd)
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import os
 import sys
+import traceback
 
 from .. import interrupt
 from ..errors import RemapError
@@ -37,12 +38,15 @@ def main(argv: list[str] | None = None) -> int:
         return _dispatch(argv)
     except RemapError as exc:
         if debug:
-            raise
+            traceback.print_exc()
         print(f"remap: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
         print("remap: interrupted", file=sys.stderr)
         return 130
+    except interrupt.Terminated:
+        print("remap: terminated", file=sys.stderr)
+        return 143
     except BrokenPipeError:  # `remap ... | head`: the reader left; results are already written
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0

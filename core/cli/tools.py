@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -104,10 +105,13 @@ def render(args: argparse.Namespace) -> int:
                           f"adapter {material.adapter!r} model {material.model!r}")
     finally:
         adapter.close()
-    if out.suffix.lower() == ".png":
-        write_png(out, preview(img, exposure(img)))
-    else:
-        write_exr(out, img)
+    try:
+        if out.suffix.lower() == ".png":
+            write_png(out, preview(img, exposure(img)))
+        else:
+            write_exr(out, img)
+    except OSError as exc:
+        raise ConfigError(f"cannot write: {exc.strerror or exc}", file=str(out)) from None
     if not args.quiet:
         print(f"wrote {out} ({scene.resolution}x{scene.resolution}, {scene.spp} spp, seed {scene.seed}; "
               f"{time.perf_counter() - t0:.2f} s; brightest pixel {float(img.max()):.4g})", file=sys.stderr)
@@ -115,13 +119,22 @@ def render(args: argparse.Namespace) -> int:
 
 
 def _image_path(text: str) -> Path:
+    """The file to write, checked before any render: a link is written through (kept), a
+    dangling one refused; its folder created and proved writable."""
+    import tempfile
+
     out = Path(text)
     if out.suffix.lower() not in (".exr", ".png"):
         raise ConfigError("must end in .exr (linear float) or .png (an sRGB preview)", field=f"--out {text}")
+    if out.is_symlink():
+        if not out.exists():
+            raise ConfigError("is a symbolic link to nothing: remove it or give another name", field=f"--out {text}")
+        out = Path(os.path.realpath(out))
     if out.is_dir():
         raise ConfigError("is a folder: give an image file name", field=f"--out {text}")
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
+        tempfile.NamedTemporaryFile(prefix=".probe-", dir=out.parent).close()
     except OSError as exc:
-        raise ConfigError(f"cannot create its folder: {exc.strerror}", field=f"--out {text}") from None
+        raise ConfigError(f"cannot write into its folder: {exc.strerror or exc}", field=f"--out {text}") from None
     return out

@@ -120,7 +120,9 @@ def test_a_folder_is_owned_by_one_run_at_a_time(tmp_path, capsys):
             with owned(tmp_path / "o"):
                 pass
     with owned(tmp_path / "o"):  # released when the first run ends
-        pass
+        with pytest.raises(ConfigError, match="is inside .*/o, which another brdf-remap run is writing"):
+            with owned(tmp_path / "o" / "points" / "00-001"):  # a sweep's point is the sweep's to write
+                pass
     with pytest.raises(ConfigError, match="--out: is empty"):
         with owned(""):
             pass
