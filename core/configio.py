@@ -1,7 +1,13 @@
-"""YAML loading whose errors name the file and the field."""
+"""YAML loading whose errors name the file and the field.
+
+The loader is PyYAML's safe one (no tags that build objects), with two changes users expect:
+numbers written as people write them are numbers (`1e-3` is a float, as in YAML 1.2, not the
+string YAML 1.1 makes of it), and a key given twice in one mapping is an error naming its line
+(a copy-paste slip would otherwise remap another material without a word)."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -13,6 +19,36 @@ from .errors import ConfigError
 M = TypeVar("M", bound=BaseModel)
 
 
+class WrongKindError(ConfigError):
+    """The file is of another kind than the one expected (a material where a scene was)."""
+
+_FLOAT = re.compile(r"""^[-+]?(?:(?:[0-9][0-9_]*)(?:\.[0-9_]*)?|\.[0-9_]+)(?:[eE][-+]?[0-9]+)?$
+                        |^[-+]?\.(?:inf|Inf|INF)$|^\.(?:nan|NaN|NAN)$""", re.X)
+
+
+_DOTTED = re.compile(r"^[a-z_][a-z0-9_]*(\.[a-z_][a-z0-9_]*)*$")
+
+
+class _Loader(yaml.SafeLoader):
+    def construct_mapping(self, node, deep=False):
+        seen: dict[Any, int] = {}
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=True)
+            try:
+                first = seen.setdefault(key, key_node.start_mark.line + 1)
+            except TypeError:
+                continue  # an unhashable key: the safe constructor reports it
+            if first != key_node.start_mark.line + 1:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"{key!r} is given twice (first on line {first}): keep one", key_node.start_mark)
+        return super().construct_mapping(node, deep)
+
+
+# Floats as YAML 1.2 reads them (PyYAML's 1.1 rule wants a dot: 1e-3 would be a string).
+_Loader.yaml_implicit_resolvers = {k: list(v) for k, v in yaml.SafeLoader.yaml_implicit_resolvers.items()}
+_Loader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT, list("-+0123456789."))
+
+
 def read_yaml(path: str | Path) -> Any:
     p = Path(path)
     if not p.exists():
@@ -21,15 +57,17 @@ def read_yaml(path: str | Path) -> Any:
         raise ConfigError("is a directory, expected a YAML file", file=str(path))
     try:
         text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"cannot read: {exc}", file=str(path)) from exc
+    except UnicodeDecodeError:
+        raise ConfigError("is not a text file (expected YAML in UTF-8)", file=str(path)) from None
+    except OSError as exc:
+        raise ConfigError(f"cannot read: {exc.strerror or exc}", file=str(path)) from None
     try:
-        return yaml.safe_load(text)
+        return yaml.load(text, Loader=_Loader)  # noqa: S506 - a SafeLoader subclass
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}" if mark else None
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise ConfigError(f"malformed YAML: {problem}", file=str(path), field=where) from exc
+        raise ConfigError(f"malformed YAML: {problem}", file=str(path), field=where) from None
 
 
 def validation_message(exc: ValidationError) -> tuple[str, str]:
@@ -37,21 +75,41 @@ def validation_message(exc: ValidationError) -> tuple[str, str]:
     errors = exc.errors()
     # A misspelt field also leaves a required one missing; the misspelling is the news.
     err = next((e for e in errors if e["type"] == "extra_forbidden"), errors[0])
-    field = ".".join(str(p) for p in err["loc"]) or "(top level)"
+    field = ".".join(str(p) for p in err["loc"])
     msg = err["msg"]
     if err["type"] == "extra_forbidden":
         msg = "unknown field (remove it or check its spelling)"
-    return field, msg
+    elif err["type"] == "value_error":
+        msg = str(err.get("ctx", {}).get("error", msg))
+        # A check across fields names the one to change first: "camera.distance: ..."
+        head, sep, rest = msg.partition(": ")
+        if sep and not field and _DOTTED.match(head):
+            field, msg = head, rest
+    return field or "(top level)", msg
 
 
-def load_yaml_model(path: str | Path, model: type[M]) -> M:
+_ROLES = {"a material": {"adapter", "model"}, "an experiment": {"kind", "sweep"},
+          "a renderer definition": {"name", "command"}, "a scene": {"sphere", "camera"}}
+
+
+def _role(data: dict) -> str | None:
+    """What kind of file the document looks like, by the keys that only that kind has."""
+    return next((role for role, keys in _ROLES.items() if keys <= set(data)), None)
+
+
+def load_yaml_model(path: str | Path, model: type[M], what: str = "") -> M:
+    """A model from a YAML file. ``what`` ("a material", "an experiment", ...) names the file's
+    expected kind: a file of another kind is said to be one."""
     data = read_yaml(path)
     if data is None:
-        data = {}
+        raise ConfigError(f"is empty: expected {what or 'a YAML mapping'}", file=str(path))
     if not isinstance(data, dict):
         raise ConfigError(f"expected a mapping at the top level, got {type(data).__name__}", file=str(path))
     try:
         return model.model_validate(data)
     except ValidationError as exc:
+        role = _role(data)
+        if what and role and role != what:
+            raise WrongKindError(f"is {role} file, where {what} was expected", file=str(path)) from None
         field, msg = validation_message(exc)
-        raise ConfigError(msg, file=str(path), field=field) from exc
+        raise ConfigError(msg, file=str(path), field=field) from None

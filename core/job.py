@@ -19,7 +19,7 @@ from .engine.tuning import ENGINE_VERSION, Tuning
 from .errors import ConfigError
 from .model import Strict
 from .plugins import AdapterRegistry
-from .scene import ProbeScene
+from .scene import MAX_SPP, ProbeScene
 from .schemas import Material, ModelSpec, Value
 from .settings import Settings
 
@@ -90,6 +90,9 @@ class Resolved:
 
 def model_of(registry: AdapterRegistry, adapter: str, model: str, file: str | None, prefix: str) -> ModelSpec:
     entry = registry.get(adapter, file=file, field_name=f"{prefix}adapter")
+    if not entry.models and entry.unavailable_reason():
+        raise ConfigError(f"adapter {adapter!r} is unavailable: {entry.unavailable_reason()}", file=file,
+                          field=f"{prefix}adapter")
     if model not in entry.models:
         known = ", ".join(sorted(entry.models)) or "none"
         raise ConfigError(f"adapter {adapter!r} has no model {model!r} (models: {known})", file=file,
@@ -114,6 +117,8 @@ def resolve(job: Job, registry: AdapterRegistry, where: Where = Where()) -> Reso
             if p.kind == "choice":
                 base[p.name] = src_params[p.name]
     base.update(fixed)
+    _check_fixed(tgt_spec, base, fixed, where)
+    _check_sampling(job, where)
     free = tgt_spec.fittable(base, fixed=set(fixed))
     versions = {name: registry.get(name).version for name in dict.fromkeys((src.adapter, tgt.adapter))}
     canonical = job.model_copy(update={
@@ -122,6 +127,26 @@ def resolve(job: Job, registry: AdapterRegistry, where: Where = Where()) -> Reso
         "versions": versions,
     })
     return Resolved(canonical, src_spec, tgt_spec, src_params, base, free, fixed)
+
+
+def _check_fixed(spec: ModelSpec, base: dict[str, Value], fixed: dict[str, Value], where: Where) -> None:
+    """A value held for a parameter the model's choices switch off would silently do nothing."""
+    for name in fixed:
+        if spec.is_active(name, base):
+            continue
+        cond = " and ".join(f"{k} is {' or '.join(v)}" for k, v in spec.param(name).active_when.items())
+        now = ", ".join(f"{k}={base[k]}" for k in spec.param(name).active_when)
+        sep = " " if where.fix_prefix.startswith("--") else "."
+        raise ConfigError(f"does nothing with {now}: it is used only when {cond}", file=where.target_file,
+                          field=f"{where.fix_prefix}{sep}{name}")
+
+
+def _check_sampling(job: Job, where: Where) -> None:
+    spp, k = job.scene.spp, job.settings.precise_spp
+    if spp * k > MAX_SPP:
+        raise ConfigError(f"{spp} spp x {k} is {spp * k} samples per pixel for the noise-limited polish, over the "
+                          f"{MAX_SPP} renderers take: lower it (1: no such polish)",
+                          field="--precise-spp" if where.target_prefix.startswith("--") else "options.precise_spp")
 
 
 def _plain(params: dict[str, Value]) -> dict[str, Any]:

@@ -51,6 +51,8 @@ class AdapterRegistry:
     entries: dict[str, AdapterEntry] = field(default_factory=dict)
     broken: dict[str, str] = field(default_factory=dict)
     pm: Any = None
+    conflicts: dict[str, str] = field(default_factory=dict)
+    """Names registered twice: neither registration is used, and choosing the name says why."""
 
     def resolve(self, name: str, *, field_name: str = "--adapter") -> str:
         """An adapter name, or a definition file (``renderer.yaml``) loaded now through the
@@ -85,6 +87,8 @@ class AdapterRegistry:
         return [str(e.source_file) for e in self.entries.values() if e.source_file is not None]
 
     def get(self, name: str, *, file: str | None = None, field_name: str = "--adapter") -> AdapterEntry:
+        if name in self.conflicts:
+            raise ConfigError(self.conflicts[name], file=file, field=field_name)
         if name not in self.entries:
             if file and (name.endswith((".yaml", ".yml")) or os.sep in name):
                 raise ConfigError(f"{name!r} is a file: a data file names an installed adapter (see `remap "
@@ -152,9 +156,9 @@ def collect_adapters(pm: PluginManager | None = None) -> AdapterRegistry:
         def register(name: str, factory: Any, _label=label) -> None:
             if not isinstance(name, str) or not name:
                 raise ConfigError(f"plugin {_label} registered an adapter with an invalid name {name!r}")
-            if name in registry.entries:
-                other = registry.entries[name].plugin
-                raise ConfigError(f"adapter {name!r} is registered twice: by {other} and by {_label}")
+            if name in registry.entries or name in registry.conflicts:
+                _conflict(registry, name, _label)
+                return
             registry.entries[name] = AdapterEntry(name, factory, _label)
 
         try:
@@ -164,6 +168,19 @@ def collect_adapters(pm: PluginManager | None = None) -> AdapterRegistry:
         except Exception as exc:
             registry.broken[label] = f"{type(exc).__name__}: {exc}"
     return registry
+
+
+def _conflict(registry: AdapterRegistry, name: str, label: str) -> None:
+    """A name registered twice is used by neither: which one was meant cannot be known. The
+    other adapters keep working, and choosing this one says who registered it."""
+    first = registry.entries.pop(name, None)
+    who = f"{first.plugin} and by {label}" if first is not None else f"{label} as well"
+    if first is None and name in registry.conflicts:
+        registry.conflicts[name] = registry.conflicts[name].replace("; uninstall", f", and by {label}; uninstall", 1)
+    else:
+        registry.conflicts[name] = (f"adapter {name!r} is registered twice: by {who}; uninstall or rename one of "
+                                    "them (a renderer definition's `name:`)")
+    registry.broken[f"adapter {name!r}"] = registry.conflicts[name]
 
 
 def collect_schemas(pm: PluginManager | None = None) -> dict[str, Any]:

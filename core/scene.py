@@ -5,9 +5,13 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from pydantic import Field, field_validator
+from pydantic import Field, field_validator, model_validator
 
 from .model import Strict as _Strict
+
+MAX_SPP = 65536
+MAX_SEED = 2**31 - 2
+"""Renderers take a signed 32-bit seed; the noise floor renders seed + 1 too."""
 
 
 class Sphere(_Strict):
@@ -53,13 +57,25 @@ class ProbeScene(_Strict):
     camera: Camera = Field(default_factory=Camera)
     light: PointLight = Field(default_factory=PointLight)
     resolution: int = Field(128, ge=8, le=4096, description="Image width and height in pixels.")
-    spp: int = Field(16, ge=1, le=65536, description="Samples per pixel.")
-    seed: int = Field(0, ge=0, description="Sampler seed; renders with the same seed are repeatable.")
+    spp: int = Field(16, ge=1, le=MAX_SPP, description="Samples per pixel.")
+    seed: int = Field(0, ge=0, le=MAX_SEED, description="Sampler seed; renders with the same seed are repeatable "
+                                                       "(the noise floor also renders seed + 1).")
 
     @field_validator("note")
     @classmethod
     def _strip(cls, v: str) -> str:
         return v.strip()
+
+    @model_validator(mode="after")
+    def _outside(self) -> "ProbeScene":
+        """The camera and the light must be outside the sphere, or the image is black."""
+        c, r = self.sphere.center, self.sphere.radius
+        for name, pos in (("camera.distance", self.camera.position), ("light.r", self.light.position)):
+            d = math.dist(pos, c)
+            if d <= r:
+                raise ValueError(f"{name}: puts it {d:g} from the sphere's centre, inside the sphere (radius {r:g}): "
+                                 "move it out")
+        return self
 
     def overridden(self, *, resolution: int | None = None, spp: int | None = None,
                    seed: int | None = None) -> "ProbeScene":
@@ -92,4 +108,4 @@ class ProbeScene(_Strict):
 def load_scene(path: str | Path) -> ProbeScene:
     from .configio import load_yaml_model
 
-    return load_yaml_model(path, ProbeScene)
+    return load_yaml_model(path, ProbeScene, "a scene")

@@ -203,7 +203,7 @@ class Material(_Strict):
 def load_material(path: str | Path) -> Material:
     from .configio import load_yaml_model
 
-    return load_yaml_model(path, Material)
+    return load_yaml_model(path, Material, "a material")
 
 
 def format_value(v: Value) -> str:

@@ -110,7 +110,9 @@ class JsonLinesWorker:
         lines = [line for line in self._stderr if line.strip()][-n:]
         return ("\n  stderr: " + "\n  stderr: ".join(lines)) if lines else ""
 
-    def _read(self, timeout: float, what: str) -> dict[str, Any]:
+    def _read(self, timeout: float, what: str, want_id: int | None = None) -> dict[str, Any]:
+        """The next answer (with ``want_id``: the answer to that request; any other JSON line is
+        stray output, kept for the error message)."""
         deadline = time.monotonic() + timeout
         while True:
             left = deadline - time.monotonic()
@@ -132,24 +134,31 @@ class JsonLinesWorker:
                 self._stderr.append(line)  # stray output: keep it for the error message
                 continue
             try:
-                return json.loads(line)
+                doc = json.loads(line)
             except json.JSONDecodeError:
                 self._stderr.append(line)
+                continue
+            if want_id is not None and not (isinstance(doc, dict) and doc.get("id") == want_id):
+                self._stderr.append(f"(stray line on stdout) {line[:200]}")
+                continue
+            return doc
 
     def request(self, msg: dict[str, Any], timeout: float | None = None) -> dict[str, Any]:
         """Send one request and wait for its answer. A dead worker is restarted once."""
         with self._lock:
             for attempt in (0, 1):
-                if not self.alive():
-                    if self.hello:  # it ran before: this is a restart
-                        self.restarts += 1
-                    self.start()
                 self._next_id += 1
                 payload = {"id": self._next_id, **msg}
                 try:
+                    if not self.alive():
+                        # Started here, inside the retry: a worker that dies while it starts
+                        # (killed, out of memory) gets its one restart too.
+                        if self.hello or attempt:  # it ran before, or died while starting
+                            self.restarts += 1
+                        self.start()
                     self.proc.stdin.write(json.dumps(payload) + "\n")
                     self.proc.stdin.flush()
-                    answer = self._read(timeout or self.request_timeout, msg.get("op", "request"))
+                    answer = self._read(timeout or self.request_timeout, msg.get("op", "request"), self._next_id)
                 except (_WorkerDied, BrokenPipeError, OSError) as exc:
                     self.proc = None
                     if attempt:

@@ -9,7 +9,6 @@ from __future__ import annotations
 import importlib.util
 import os
 import sys
-import tempfile
 import threading
 from collections import OrderedDict
 from pathlib import Path
@@ -19,6 +18,7 @@ import numpy as np
 
 from brdfremap.core.appearance import Appearance
 from brdfremap.core.atomic import temp_beside, write_text_atomic
+from brdfremap.core.scratch import scratch_dir
 from brdfremap.core.errors import ConfigError, RenderError
 from brdfremap.core.protocol import Adapter
 from brdfremap.core.scene import ProbeScene
@@ -47,12 +47,6 @@ def _worker_count() -> int:
     # Principled is 1.03x as fast (1.11x before Jacobians were updated between rendered ones)
     # and a cold one no slower (the second Blender starts during the first renders).
     return 2 if (os.cpu_count() or 1) >= 2 else 1
-
-
-def _scratch_dir() -> str:
-    shm = "/dev/shm"
-    base = shm if os.path.isdir(shm) and os.access(shm, os.W_OK) else None
-    return tempfile.mkdtemp(prefix="brdfremap-cycles-", dir=base)
 
 
 def read_passes(path: str, expected: tuple[str, ...] = PASSES) -> dict[str, np.ndarray]:
@@ -126,7 +120,7 @@ class CyclesAdapter(Adapter):
                 "worker": f"{sys.executable} -m brdfremap.adapters.cycles.worker"}
 
     def __init__(self) -> None:
-        self.scratch = _scratch_dir()
+        self.scratch = str(scratch_dir("cycles"))
         self.worker = JsonLinesWorker([sys.executable, "-m", "brdfremap.adapters.cycles.worker"], name="cycles")
         self._passes: OrderedDict[str, dict[str, np.ndarray]] = OrderedDict()
         self.renders = 0

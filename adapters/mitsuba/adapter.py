@@ -169,6 +169,9 @@ class MitsubaAdapter(Adapter):
         except Exception as exc:
             raise RenderError(f"mitsuba cannot use variant {self.choice.variant!r}: {exc}") from exc
         self.mi = mi
+        # Mitsuba logs to stdout, where a user's report goes (`remap ... | tee`): its warnings
+        # ("sample count rounded up" at a high spp, hundreds in a sweep) are not ours to print there.
+        mi.logger().set_log_level(mi.LogLevel.Error)
         try:
             register_bsdfs()
         except Exception as exc:

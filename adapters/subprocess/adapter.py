@@ -14,7 +14,6 @@ import shutil
 import signal
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -24,6 +23,7 @@ from brdfremap.core.errors import ConfigError, RenderError
 from brdfremap.core.imageio import read_rgb
 from brdfremap.core.protocol import Adapter
 from brdfremap.core.scene import ProbeScene
+from brdfremap.core.scratch import scratch_dir
 from brdfremap.core.schemas import Value, format_value
 from brdfremap.core.workerproc import JsonLinesWorker
 
@@ -84,8 +84,6 @@ class SubprocessAdapter(Adapter):
 
     def __init__(self) -> None:
         d = self.definition
-        base = "/dev/shm" if os.access("/dev/shm", os.W_OK) else None
-        self.work = Path(tempfile.mkdtemp(prefix=f"brdfremap-{d.name}-", dir=base))
         self.here = str(self.source_file.parent.resolve())
         self.template = None
         if d.scene_template:
@@ -95,6 +93,7 @@ class SubprocessAdapter(Adapter):
             except OSError as exc:
                 raise ConfigError(f"cannot read the scene template: {exc}", file=str(self.source_file),
                                   field="scene_template") from exc
+        self.work = scratch_dir(f"external-{d.name}")
         self.env = {**os.environ, **d.env}
         self.worker = None
         if d.mode == "persistent":
@@ -124,22 +123,10 @@ class SubprocessAdapter(Adapter):
         p = self.models[model].with_lobe(params, lobe)
         self.count += 1
         job = self.work / f"r{self.count}"
-        job.mkdir()
         try:
+            job.mkdir()
             output = job / f"image.{d.output_format}"
-            scene_json, params_json = job / "scene.json", job / "params.json"
-            scene_json.write_text(json.dumps(scene.document(), indent=1))
-            params_json.write_text(json.dumps({"model": model, "params": {
-                k: list(v) if isinstance(v, tuple) else v for k, v in p.items()}}, indent=1))
-            values = {"scene_json": str(scene_json), "params_json": str(params_json), "output": str(output),
-                      "model": model, "width": str(scene.resolution), "height": str(scene.resolution),
-                      "spp": str(scene.spp), "seed": str(scene.seed), "python": sys.executable, "here": self.here}
-            if self.template is not None:
-                tvars = {**template_vars(scene), "model": model, **{f"p_{k}": self._value(v) for k, v in p.items()}}
-                tvars.update(d.models[model].template_vars)
-                scene_file = job / f"scene{Path(d.scene_template).suffix}"
-                scene_file.write_text(substitute(self.template, tvars, f"scene_template {d.scene_template}"))
-                values["scene_file"] = str(scene_file)
+            values = self._request_files(model, p, scene, job, output)
             stderr = ""
             if self.worker is not None:
                 request = {"op": "render", "model": model,
@@ -152,8 +139,31 @@ class SubprocessAdapter(Adapter):
             else:
                 stderr = self._run_once(model, p, values)
             return self._read(model, p, output, scene, stderr)
+        except OSError as exc:  # the scratch folder's filesystem is full, or gone
+            raise self._fail(model, p, f"cannot write its request files in {self.work}: {exc.strerror or exc}") \
+                from None
         finally:
             shutil.rmtree(job, ignore_errors=True)
+
+    def _request_files(self, model: str, p: dict[str, Value], scene: ProbeScene, job: Path,
+                       output: Path) -> dict[str, str]:
+        """Write the scene and parameters (and the filled scene template) for one render; return
+        the placeholders' values."""
+        d = self.definition
+        scene_json, params_json = job / "scene.json", job / "params.json"
+        scene_json.write_text(json.dumps(scene.document(), indent=1))
+        params_json.write_text(json.dumps({"model": model, "params": {
+            k: list(v) if isinstance(v, tuple) else v for k, v in p.items()}}, indent=1))
+        values = {"scene_json": str(scene_json), "params_json": str(params_json), "output": str(output),
+                  "model": model, "width": str(scene.resolution), "height": str(scene.resolution),
+                  "spp": str(scene.spp), "seed": str(scene.seed), "python": sys.executable, "here": self.here}
+        if self.template is not None:
+            tvars = {**template_vars(scene), "model": model, **{f"p_{k}": self._value(v) for k, v in p.items()}}
+            tvars.update(d.models[model].template_vars)
+            scene_file = job / f"scene{Path(d.scene_template).suffix}"
+            scene_file.write_text(substitute(self.template, tvars, f"scene_template {d.scene_template}"))
+            values["scene_file"] = str(scene_file)
+        return values
 
     def _argv(self, p: dict[str, Value], values: dict[str, str]) -> list[str]:
         argv: list[str] = []

@@ -63,10 +63,32 @@ class RendererDef(BaseModel):
             raise ValueError("{defines} must be an argument of its own")
         return argv
 
+    @field_validator("rgb_format")
+    @classmethod
+    def _rgb(cls, text: str) -> str:
+        try:
+            text.format(r="1", g="2", b="3")
+        except (KeyError, IndexError, ValueError) as exc:
+            raise ValueError(f"{text!r} cannot be filled ({type(exc).__name__}: {exc}): use {{r}}, {{g}} and {{b}}, "
+                             "e.g. '{r}, {g}, {b}'") from None
+        return text
+
+    @field_validator("define")
+    @classmethod
+    def _define(cls, items: list[str]) -> list[str]:
+        for item in items:
+            for name in _TOKEN.findall(item):
+                if name not in ("key", "value"):
+                    raise ValueError(f"unknown placeholder {{{name}}} in {item!r}: a define knows {{key}} and {{value}}")
+        return items
+
     @model_validator(mode="after")
     def _modes(self) -> "RendererDef":
         if self.mode == "oneshot" and not any("{output}" in a for a in self.command):
-            raise ValueError("a oneshot command must say where to write the image: use {output}")
+            raise ValueError("command: a oneshot command must say where to write the image: use {output}")
+        if any("{scene_file}" in a for a in self.command) and not self.scene_template:
+            raise ValueError("command: {scene_file} is the filled scene template: give scene_template (a file "
+                             "beside this one) too")
         return self
 
     def model_specs(self) -> dict[str, ModelSpec]:
@@ -94,7 +116,7 @@ class RendererDef(BaseModel):
 
 
 def load_definition(path: str | Path) -> RendererDef:
-    definition = load_yaml_model(path, RendererDef)
+    definition = load_yaml_model(path, RendererDef, "a renderer definition")
     try:
         definition.model_specs()
     except ValueError as exc:

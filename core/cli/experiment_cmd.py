@@ -14,7 +14,7 @@ WHAT = {"sweep": "Sweep one source parameter, remap every point, and write a CSV
 
 
 def parser(kind: str) -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog=f"remap {kind}", description=WHAT[kind] + " An interrupted run resumes: "
+    p = options.Parser(prog=f"remap {kind}", description=WHAT[kind] + " An interrupted run resumes: "
                                 "finished points in DIR are reused when their inputs are unchanged.")
     p.add_argument("experiment", metavar="EXPERIMENT.yaml", help="experiment file (see configs/experiments/)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")

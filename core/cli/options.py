@@ -16,6 +16,13 @@ from ..settings import DEFAULTS, Settings
 _METAVARS = {"starts": "N", "coarse": "N", "precise_spp": "K", "threshold": "FRACTION", "jacobian_updates": "N"}
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse whose usage errors are one line, like every other error of `remap`."""
+
+    def error(self, message: str):  # type: ignore[override]
+        self.exit(2, f"remap: error: {message} (see `{self.prog} --help`)\n")
+
+
 def flag(field: str) -> str:
     return "--" + field.replace("_", "-")
 

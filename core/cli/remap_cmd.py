@@ -28,7 +28,7 @@ examples:
 
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = options.Parser(
         prog="remap",
         description="Remap a material to another renderer's BRDF model by matching rendered images "
         "(Sztrajman et al., MAM 2017).",

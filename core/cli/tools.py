@@ -15,7 +15,7 @@ from . import options
 
 
 def adapters_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="remap adapters", description="List adapters and their models.")
+    p = options.Parser(prog="remap adapters", description="List adapters and their models.")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     return p
 
@@ -48,7 +48,7 @@ def adapters(args: argparse.Namespace) -> int:
 
 
 def schema_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="remap schema", description="Print the JSON Schema of one of the file formats "
+    p = options.Parser(prog="remap schema", description="Print the JSON Schema of one of the file formats "
                                 "(result.json by default), to validate what you read or write.")
     p.add_argument("name", nargs="?", default="report", help="report (result.json), material, scene, experiment, "
                                                              "job, settings, or one a plugin adds (renderer)")
@@ -70,7 +70,7 @@ def schema(args: argparse.Namespace) -> int:
 
 
 def render_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="remap render", description="Render one material on the probe scene, without "
+    p = options.Parser(prog="remap render", description="Render one material on the probe scene, without "
                                 "fitting anything: a linear float EXR (or an sRGB PNG preview for a .png name).")
     p.add_argument("material", metavar="MATERIAL.yaml", help="material file (adapter, model, params)")
     p.add_argument("--out", required=True, metavar="IMAGE.exr", help="image to write (.exr, or .png for a preview)")

@@ -131,7 +131,7 @@ class Experiment(_Strict):
 
 
 def load_experiment(path: str | Path) -> Experiment:
-    return load_yaml_model(path, Experiment)
+    return load_yaml_model(path, Experiment, "an experiment")
 
 
 @dataclass(frozen=True)

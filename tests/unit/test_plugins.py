@@ -30,12 +30,18 @@ def test_registered_adapter_is_found_and_constructed_only_on_demand():
     assert isinstance(reg.create("toy"), ToyAdapter)
 
 
-def test_duplicate_names_are_rejected_naming_both_plugins():
-    pm = get_plugin_manager(load_entrypoints=False,
-                            plugins=(_plugin("first_pkg", ToyAdapter), _plugin("second_pkg", ToyAdapter)))
+def test_duplicate_names_are_rejected_naming_both_plugins_and_the_others_keep_working():
+    class Other(ToyAdapter):
+        name = "other"
+
+    pm = get_plugin_manager(load_entrypoints=False, plugins=(
+        _plugin("first_pkg", ToyAdapter), _plugin("second_pkg", ToyAdapter, Other)))
+    reg = collect_adapters(pm)
+    assert reg.names() == ["other"] and isinstance(reg.create("other"), Other)
     with pytest.raises(ConfigError) as e:
-        collect_adapters(pm)
-    assert "first_pkg" in str(e.value) and "second_pkg" in str(e.value)
+        reg.get("toy")
+    assert "first_pkg" in str(e.value) and "second_pkg" in str(e.value) and "registered twice" in str(e.value)
+    assert any("registered twice" in v for v in reg.broken.values())
 
 
 def test_misspelt_hook_fails_at_start_up_with_its_name():

@@ -75,6 +75,9 @@ def main():
             if req["params"].get("fault") == "die":
                 print("fake renderer: segfault-like death", file=sys.stderr, flush=True)
                 os._exit(11)
+            if req["params"].get("fault") == "stray":  # a chatty renderer: JSON that answers nothing
+                print(json.dumps({"progress": 0.5}), flush=True)
+                print(json.dumps({"id": -1, "ok": True}), flush=True)
             render(req["scene"], req["params"], req["output"])
             print(json.dumps({"id": req.get("id"), "ok": True}), flush=True)
         return

@@ -1,0 +1,57 @@
+"""Scratch folders of adapters (images a renderer writes, request files): in /dev/shm where it
+is writable, each named after the process that owns it, so that a folder left by a process
+that was killed (`kill -9`, a crash) is found and removed by the next one that starts."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+PREFIX = "brdfremap-"
+
+
+def _base() -> str | None:
+    shm = "/dev/shm"
+    return shm if os.path.isdir(shm) and os.access(shm, os.W_OK) else None
+
+
+def scratch_dir(kind: str) -> Path:
+    """A fresh folder ``brdfremap-<kind>-<pid>-XXXX`` (after removing any whose process is gone)."""
+    remove_orphans()
+    return Path(tempfile.mkdtemp(prefix=f"{PREFIX}{kind}-{os.getpid()}-", dir=_base()))
+
+
+def remove_orphans() -> list[Path]:
+    """Remove the scratch folders whose owning process no longer runs; return them."""
+    base = Path(_base() or tempfile.gettempdir())
+    gone = []
+    try:
+        entries = list(base.glob(PREFIX + "*"))
+    except OSError:
+        return gone
+    for p in entries:
+        pid = _owner(p.name)
+        if pid is not None and not _alive(pid) and p.is_dir():
+            shutil.rmtree(p, ignore_errors=True)
+            gone.append(p)
+    return gone
+
+
+def _owner(name: str) -> int | None:
+    parts = name[len(PREFIX):].split("-")
+    for part in parts[1:]:  # brdfremap-<kind>-<pid>-<random>; a kind may hold dashes
+        if part.isdigit():
+            return int(part)
+    return None
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True  # another user's process: not ours to judge
+    return True
