@@ -119,6 +119,9 @@ class ModelSpec(_Strict):
     lobes: dict[Literal["diffuse", "specular"], LobeSpec] = Field(
         default_factory=dict, description="Empty when the adapter cannot isolate lobes (two-stage then falls back)."
     )
+    derived: tuple[str, ...] = Field((), description="Quantities the adapter derives from the parameters "
+                                                     "(Adapter.derived: a conductor's reflectivity), for reports and "
+                                                     "experiment plots.")
 
     @model_validator(mode="after")
     def _check(self) -> "ModelSpec":

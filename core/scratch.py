@@ -1,5 +1,5 @@
-"""Scratch folders of adapters (images a renderer writes, request files): in /dev/shm where it
-is writable, each named after the process that owns it, so that a folder left by a process
+"""Scratch folders of adapters (images a renderer writes, request files): in $BRDFREMAP_SCRATCH,
+or /dev/shm where it is writable, each named after the process that owns it, so that a folder left by a process
 that was killed (`kill -9`, a crash) is found and removed by the next one that starts."""
 
 from __future__ import annotations
@@ -9,10 +9,16 @@ import shutil
 import tempfile
 from pathlib import Path
 
+from .errors import ConfigError
+
 PREFIX = "brdfremap-"
 
 
 def _base() -> str | None:
+    """$BRDFREMAP_SCRATCH if set, else /dev/shm where writable (memory), else the temp folder."""
+    chosen = os.environ.get("BRDFREMAP_SCRATCH")
+    if chosen:
+        return chosen
     shm = "/dev/shm"
     return shm if os.path.isdir(shm) and os.access(shm, os.W_OK) else None
 
@@ -20,7 +26,12 @@ def _base() -> str | None:
 def scratch_dir(kind: str) -> Path:
     """A fresh folder ``brdfremap-<kind>-<pid>-XXXX`` (after removing any whose process is gone)."""
     remove_orphans()
-    return Path(tempfile.mkdtemp(prefix=f"{PREFIX}{kind}-{os.getpid()}-", dir=_base()))
+    base = _base()
+    try:
+        return Path(tempfile.mkdtemp(prefix=f"{PREFIX}{kind}-{os.getpid()}-", dir=base))
+    except OSError as exc:
+        raise ConfigError(f"cannot create a scratch folder in {base or tempfile.gettempdir()}: "
+                          f"{exc.strerror or exc} (set BRDFREMAP_SCRATCH to a writable folder)") from None
 
 
 def remove_orphans() -> list[Path]:

@@ -134,6 +134,13 @@ class AdapterContract:
             assert spec.name == name
             spec.complete({})  # defaults are valid
 
+    def test_derived_quantities_are_declared(self):
+        """What ``derived`` returns for a model's defaults is declared in its ``ModelSpec.derived``
+        (an experiment's plot is checked against them before any render)."""
+        for name, spec in self.adapter.models.items():
+            got = set(self.adapter.derived(name, spec.complete({})))
+            assert got <= set(spec.derived), (name, sorted(got - set(spec.derived)))
+
     def test_neutral_reading_names_only_the_models_parameters(self):
         """Optional: an adapter without ``appearance``/``from_appearance`` passes trivially. Each
         reading of a model's defaults is an Appearance; each conversion into a model names only

@@ -156,10 +156,13 @@ class JsonLinesWorker:
                         if self.hello or attempt:  # it ran before, or died while starting
                             self.restarts += 1
                         self.start()
-                    self.proc.stdin.write(json.dumps(payload) + "\n")
-                    self.proc.stdin.flush()
+                    proc = self.proc
+                    if proc is None:  # closed from another thread (the adapter shutting down)
+                        raise RenderError(f"{self.name}: the worker was closed")
+                    proc.stdin.write(json.dumps(payload) + "\n")
+                    proc.stdin.flush()
                     answer = self._read(timeout or self.request_timeout, msg.get("op", "request"), self._next_id)
-                except (_WorkerDied, BrokenPipeError, OSError) as exc:
+                except (_WorkerDied, BrokenPipeError, OSError, ValueError) as exc:  # ValueError: a closed pipe
                     self.proc = None
                     if attempt:
                         raise RenderError(str(exc) if isinstance(exc, _WorkerDied) else

@@ -18,3 +18,63 @@ def registry_of(name: str, factory) -> object:
 
     mod.brdfremap_register_adapters = brdfremap_register_adapters
     return collect_adapters(get_plugin_manager(load_entrypoints=False, plugins=(mod,)))
+
+
+ROOT = __import__("pathlib").Path(__file__).resolve().parents[1]
+MATERIALS = ROOT / "configs" / "materials"
+
+
+def remap(*args, cwd=None, env=None, timeout=300, **popen):
+    """`remap ARGS` in a process of its own, as a user runs it: a CompletedProcess (text)."""
+    import os
+    import subprocess
+    import sys
+
+    cmd = [sys.executable, "-m", "brdfremap.core.cli", *map(str, args)]
+    return subprocess.run(cmd, capture_output=True, text=True, cwd=cwd, timeout=timeout,
+                          env={**os.environ, **(env or {})}, **popen)
+
+
+def one_line_error(proc, *words) -> str:
+    """The process failed with exit 2 and one line on stderr that names all ``words``."""
+    lines = [line for line in proc.stderr.strip().splitlines() if line.strip()]
+    assert proc.returncode == 2, (proc.returncode, proc.stderr[-2000:])
+    assert len(lines) == 1 and lines[0].startswith("remap: error: "), proc.stderr[-2000:]
+    assert "Traceback" not in proc.stderr
+    for w in words:
+        assert w in lines[0], (w, lines[0])
+    return lines[0]
+
+
+class SmallFilesystem:
+    """A tmpfs of ``size`` mounted at ``path`` (root only: the test that needs one runs as root in
+    CI), or None when this machine cannot mount one."""
+
+    def __init__(self, path, size="4m", options=""):
+        self.path, self.size, self.options = path, size, options
+
+    def __enter__(self):
+        import subprocess
+
+        self.path.mkdir(parents=True, exist_ok=True)
+        opts = f"size={self.size}" + (f",{self.options}" if self.options else "")
+        ok = subprocess.run(["mount", "-t", "tmpfs", "-o", opts, "tmpfs", str(self.path)],
+                            capture_output=True).returncode == 0
+        self.mounted = ok
+        return self.path if ok else None
+
+    def __exit__(self, *exc):
+        import subprocess
+
+        if self.mounted:
+            subprocess.run(["umount", "-l", str(self.path)], capture_output=True)
+
+
+def fill(folder, leave: int) -> None:
+    """Fill a filesystem until only ``leave`` bytes are free."""
+    import os
+
+    st = os.statvfs(folder)
+    free = st.f_bavail * st.f_frsize
+    with open(os.path.join(folder, "filler"), "wb") as f:
+        f.write(b"\0" * max(free - leave, 0))

@@ -36,6 +36,7 @@ def _lobes(*specular: str) -> dict[str, LobeSpec]:
 
 ROUGHCONDUCTOR = ModelSpec(
     name="roughconductor",
+    derived=('reflectivity', 'edge_tint'),
     description="Rough metal: microfacet conductor with Fresnel from a named IOR preset or eta/k.",
     parameters=(
         DISTRIBUTION,
@@ -54,6 +55,7 @@ ROUGHCONDUCTOR = ModelSpec(
 
 ROUGHPLASTIC = ModelSpec(
     name="roughplastic",
+    derived=('specular_f0',),
     description="Diffuse base under a rough dielectric coating (Mitsuba's roughplastic).",
     parameters=(
         DISTRIBUTION,
@@ -111,6 +113,7 @@ def _refl(name: str, default: float, upper: float, desc: str, lobe: str) -> Para
 
 WARD = ModelSpec(
     name="ward",
+    derived=('energy_scale', 'effective_specular_reflectance', 'effective_diffuse_reflectance'),
     description="Mitsuba 0.5's Ward BSDF (isotropic here; the plugin takes alpha_u/alpha_v too).",
     parameters=(
         ParamSpec(name="variant", kind="choice", default="balanced", choices=("ward", "ward-duer", "balanced"),
@@ -127,6 +130,7 @@ WARD = ModelSpec(
 
 PHONG = ModelSpec(
     name="phong",
+    derived=('energy_scale', 'effective_specular_reflectance', 'effective_diffuse_reflectance'),
     description="Mitsuba 0.5's modified (energy-normalised) Phong BSDF.",
     parameters=(
         ENERGY,
@@ -143,6 +147,7 @@ AS_ALPHA = ParamSpec(name="alpha", kind="scalar", lower=0.01, upper=1.0, default
 
 AS_CONDUCTOR = ModelSpec(
     name="ashikhmin_shirley",
+    derived=('reflectivity', 'edge_tint'),
     description="Conductor with Mitsuba 0.5's Ashikhmin-Shirley (anisotropic Phong) microfacet distribution.",
     parameters=(
         ParamSpec(name="material", kind="choice", default="reflectivity",
@@ -168,6 +173,7 @@ AS_CONDUCTOR = ModelSpec(
 
 AS_PLASTIC = ModelSpec(
     name="ashikhmin_shirley_plastic",
+    derived=('specular_f0',),
     description="Diffuse base under a rough dielectric with Mitsuba 0.5's Ashikhmin-Shirley distribution.",
     parameters=(
         BASE_COLOUR,

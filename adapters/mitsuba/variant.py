@@ -63,6 +63,16 @@ def _cache_file() -> Path:
     return Path(base) / "brdfremap" / "mitsuba-llvm-probe.json"
 
 
+def _read_cache(cache: Path) -> dict:
+    """The probe's verdicts so far; a cache that is unreadable or not what this code writes is
+    ignored (and rewritten by the next probe), never an error."""
+    try:
+        known = json.loads(cache.read_text())
+    except (OSError, ValueError):
+        return {}
+    return known if isinstance(known, dict) else {}
+
+
 def _probe(lib: str, timeout: float = 120.0) -> tuple[bool, str]:
     try:
         stamp = f"{importlib.metadata.version('mitsuba')}|{lib}|{os.stat(lib).st_mtime_ns}"
@@ -70,12 +80,10 @@ def _probe(lib: str, timeout: float = 120.0) -> tuple[bool, str]:
         return False, str(exc)
     key = hashlib.sha1(stamp.encode()).hexdigest()
     cache = _cache_file()
-    try:
-        known = json.loads(cache.read_text())
-    except (OSError, ValueError):
-        known = {}
-    if key in known:
-        return known[key]["ok"], known[key]["detail"]
+    known = _read_cache(cache)
+    entry = known.get(key)
+    if isinstance(entry, dict) and isinstance(entry.get("ok"), bool) and isinstance(entry.get("detail"), str):
+        return entry["ok"], entry["detail"]
     env = {**os.environ, "DRJIT_LIBLLVM_PATH": lib}
     try:
         proc = subprocess.run([sys.executable, "-c", _PROBE], env=env, capture_output=True, text=True, timeout=timeout)

@@ -74,13 +74,12 @@ def run(args: argparse.Namespace) -> int:
     job = Job(source=source, target=Target(adapter=adapter, model=args.model, fix=fixed), scene=scene,
               settings=settings, label=str(args.source))
     resolved = resolve(job, registry, Where(source_file=str(args.source)))
-    if not args.quiet:
-        print(f"remap {source.adapter}:{source.model} -> {adapter}:{args.model}  ({scene.resolution}x"
+    header = (f"remap {source.adapter}:{source.model} -> {adapter}:{args.model}  ({scene.resolution}x"
               f"{scene.resolution}, {scene.spp} spp, scheme {settings.scheme}; fitting "
-              f"{', '.join(resolved.free) or 'nothing'})", file=sys.stderr, flush=True)
+              f"{', '.join(resolved.free) or 'nothing'})")
     with owned(args.out) as folder, workers() as w, adapter_pool(registry):
         runner = Runner(Store(folder), w, renderer_files=tuple(registry.loaded_files()), quiet=True,
-                        render_progress=RenderProgress(not args.quiet), reuse=not args.force)
+                        render_progress=RenderProgress(not args.quiet, header), reuse=not args.force)
         (done,) = runner.run([Task("", resolved.job, str(args.source))])
     if done.redone and not args.quiet:
         print(f"note: the result that was in {folder} was replaced: {done.redone}", file=sys.stderr)

@@ -53,12 +53,38 @@ def run_experiment(exp: Experiment, file: str, out: str | Path, registry: Adapte
 
 
 def validate(exp: Experiment, file: str, registry: AdapterRegistry) -> None:
-    """What no single job can check: the swept and grouped parameters exist in the source model."""
+    """What no single job can check, before any render: the swept and grouped parameters exist in
+    the source model, and what the plot, the comparison and the cliffs read exists."""
     spec = model_of(registry, exp.source.adapter, exp.source.model, file, "source.")
     for name, where in ((exp.sweep.param, "sweep.param"), (exp.groups.param if exp.groups else None, "groups.param")):
         if name is not None and name not in spec.names:
             raise ConfigError(f"model {spec.name!r} has no parameter {name!r} (known: {', '.join(spec.names)})",
                               file=file, field=where)
+    target = model_of(registry, exp.target.adapter, exp.target.model, file, "target.")
+    sides = {"source": spec, "target": target}
+    if exp.kind == "roundtrip":
+        back = exp.back_side()
+        sides["back"] = model_of(registry, back.adapter, back.model, file, "back.")
+    for where, text in (("plot.x", exp.plot.x), ("plot.y", exp.plot.y)):
+        side, name = text.split(".", 1)
+        if side not in sides:
+            raise ConfigError(f"{side}.<name> belongs to a round trip", file=file, field=where)
+        _known(sides[side], name, file, where)
+    if exp.kind == "roundtrip":
+        compare = exp.compare or exp.plot.x.split(".", 1)[1]
+        for side in ("source", "back"):
+            _known(sides[side], compare, file, "compare")
+    for name in exp.cliff.params or ():
+        if name not in target.names:
+            raise ConfigError(f"model {target.name!r} has no parameter {name!r} (known: {', '.join(target.names)})",
+                              file=file, field="cliff.params")
+
+
+def _known(spec, name: str, file: str, where: str) -> None:
+    known = [*spec.names, *spec.derived]
+    if name not in known:
+        raise ConfigError(f"model {spec.name!r} has no parameter or derived quantity {name!r} (known: "
+                          f"{', '.join(known)})", file=file, field=where)
 
 
 def _forward_task(exp: Experiment, file: str, p: Point, scene: ProbeScene, registry: AdapterRegistry) -> Task:

@@ -12,7 +12,7 @@ from pydantic import Field, model_validator
 from ..configio import load_yaml_model
 from ..job import Target
 from ..model import Strict as _Strict
-from ..scene import ProbeScene, load_scene
+from ..scene import MAX_SEED, ProbeScene, load_scene
 from ..settings import Settings
 
 MAX_POINTS = 100_000
@@ -60,7 +60,7 @@ class SceneSpec(_Strict):
                                                "probe).")
     resolution: int | None = Field(None, ge=8, le=4096)
     spp: int | None = Field(None, ge=1, le=65536)
-    seed: int | None = Field(None, ge=0, le=2**31 - 1)
+    seed: int | None = Field(None, ge=0, le=MAX_SEED)
 
     def scene(self, base_dir: Path) -> ProbeScene:
         scene = ProbeScene()

@@ -110,6 +110,16 @@ def test_bad_definitions_name_the_file_and_field(tmp_path):
     bad.write_text('name: x\ncommand: ["r"]\nmodels: {}\n')
     with pytest.raises(ConfigError, match="use \\{output\\}"):
         adapter_class(bad)
+    # Found when the definition is loaded, not at the first render (they were tracebacks there).
+    for line, words in (('rgb_format: "{r} {q}"', "rgb_format: '\\{r\\} \\{q\\}' cannot be filled"),
+                        ('define: ["-D", "{vlaue}"]', "define: unknown placeholder \\{vlaue\\}"),
+                        ('command: ["r", "{scene_file}", "{output}"]', "give scene_template")):
+        key = line.split(":")[0]
+        base = {"name": "name: x", "command": 'command: ["r", "{output}"]', "models": "models: {}"}
+        base[key] = line
+        bad.write_text("\n".join(base.values()) + "\n")
+        with pytest.raises(ConfigError, match=words):
+            adapter_class(bad)
 
 
 class TestFakeRendererContract(AdapterContract):

@@ -1,0 +1,130 @@
+"""Nothing lost, nothing wrong: the output folder's rules, with real processes and real filesystems.
+
+Each test is one case of docs/reliability.md. Run them alone with `pytest tests/reliability`."""
+
+import os
+import stat
+import subprocess
+import sys
+import time
+
+import pytest
+
+from brdfremap.core.store import Store
+from helpers import MATERIALS, SmallFilesystem, fill, one_line_error, remap
+
+GOLD = MATERIALS / "gold.yaml"
+SMALL = ["--adapter", "mitsuba", "--model", "roughconductor", "--fix", "distribution=ggx", "--resolution", "32"]
+
+
+def test_two_remaps_into_one_folder_at_once_the_second_is_refused(tmp_path, mitsuba_adapter):
+    """Case 1. While one run owns the folder, a second gets one line and exit 2; the first's
+    result is whole (every file matches the hash its result.json records)."""
+    out = tmp_path / "o"
+    cmd = [sys.executable, "-m", "brdfremap.core.cli", "--source", str(GOLD), "--out", str(out),
+           *SMALL[:-1], "256", "--spp", "512", "--start", "defaults"]
+    first = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 60
+    while not (out / ".lock").exists() or not (out / ".lock").read_text().strip():
+        assert first.poll() is None and time.time() < deadline, first.communicate()
+        time.sleep(0.02)
+    second = remap("--source", GOLD, "--out", out, *SMALL)
+    one_line_error(second, "another brdf-remap run is writing this folder")
+    assert first.wait(timeout=120) == 0, first.communicate()
+    stored = Store(out).inspect("")
+    assert stored.report is not None and stored.report.job.scene.resolution == 256, stored.problem
+
+
+@pytest.mark.parametrize("kind", ["below a file", "dangling link", "looping link", "empty"])
+def test_a_bad_out_is_one_line_before_any_render(tmp_path, kind, mitsuba_adapter):
+    """Cases 3 and 4, for remap, sweep and render."""
+    (tmp_path / "file").write_text("x")
+    os.symlink(tmp_path / "nowhere", tmp_path / "dangling")
+    os.symlink(tmp_path / "loop-b", tmp_path / "loop-a")
+    os.symlink(tmp_path / "loop-a", tmp_path / "loop-b")
+    out = {"below a file": tmp_path / "file" / "o", "dangling link": tmp_path / "dangling",
+           "looping link": tmp_path / "loop-a", "empty": ""}[kind]
+    (tmp_path / "result.json").write_text("{}")  # `--out ""` must not touch the current folder's
+    exp = tmp_path / "exp.yaml"
+    exp.write_text("kind: sweep\nname: t\nsource: {adapter: mitsuba, model: roughconductor, params: {alpha: 0.1}}\n"
+                   "sweep: {param: material, values: [Au, Cu]}\ntarget: {adapter: mitsuba, model: roughconductor}\n"
+                   "scene: {resolution: 32}\nplot: {x: source.alpha, y: target.alpha}\n")
+    for proc in (remap("--source", GOLD, "--out", out, *SMALL, cwd=tmp_path),
+                 remap("sweep", exp, "--out", out, cwd=tmp_path)):
+        one_line_error(proc, "--out")
+        assert "  [" not in proc.stderr  # no progress line: nothing was rendered
+    if kind != "empty":
+        image = str(out) + ".exr" if kind == "below a file" else out
+        one_line_error(remap("render", GOLD, "--out", image, cwd=tmp_path), "--out")
+    assert (tmp_path / "result.json").read_text() == "{}"
+
+
+def test_a_read_only_filesystem_is_one_line_before_any_render(tmp_path, mitsuba_adapter):
+    """Case 3: a read-only filesystem (a tmpfs mounted ro) for remap, sweep and render."""
+    with SmallFilesystem(tmp_path / "ro", "1m", "ro") as ro:
+        if ro is None:
+            pytest.skip("cannot mount a tmpfs here (needs root)")
+        for proc in (remap("--source", GOLD, "--out", ro / "o", *SMALL),
+                     remap("render", GOLD, "--out", ro / "x.exr", "--resolution", "32")):
+            one_line_error(proc, "Read-only file system")
+
+
+def test_a_full_disk_keeps_the_previous_result_and_says_which_file(tmp_path, mitsuba_adapter):
+    """Case 5. The result is written aside first: with the disk full, the remap fails with one
+    line naming the file and the reason, and the previous result is still there, whole."""
+    with SmallFilesystem(tmp_path / "fs", "2m") as fs:
+        if fs is None:
+            pytest.skip("cannot mount a tmpfs here (needs root)")
+        out = fs / "o"
+        assert remap("--source", GOLD, "--out", out, *SMALL, "--quiet").returncode == 0
+        before = Store(out).inspect("").report
+        fill(fs, leave=20_000)
+        proc = remap("--source", GOLD, "--out", out, *SMALL, "--force", "--quiet")
+        line = one_line_error(proc, "no space left on the device")
+        assert str(out) in line and "the previous result, if any, is kept" in line
+        after = Store(out).inspect("")
+        assert after.report is not None and after.report.document() == before.document(), after.problem
+        assert not [p for p in os.listdir(out) if p.startswith(".staging")]
+
+
+def test_stale_files_of_an_earlier_result_and_a_killed_write_go(tmp_path, mitsuba_adapter):
+    """Case 10: a staging folder left by a kill, and files the previous result listed but this
+    one has not, are removed; the user's own files stay."""
+    out = tmp_path / "o"
+    assert remap("--source", GOLD, "--out", out, *SMALL, "--quiet").returncode == 0
+    (out / ".staging-killed").mkdir()
+    (out / ".staging-killed" / "source.exr").write_bytes(b"half")
+    (out / "mine.txt").write_text("the user's")
+    assert remap("--source", GOLD, "--out", out, *SMALL[:-1], "48", "--quiet").returncode == 0
+    assert not (out / ".staging-killed").exists() and (out / "mine.txt").read_text() == "the user's"
+
+
+def test_results_are_readable_by_others_under_the_usual_umask(tmp_path, mitsuba_adapter):
+    """Case 11: files get what the umask gives (0644 under 022), not mkstemp's 0600."""
+    out = tmp_path / "o"
+    proc = subprocess.run(["sh", "-c", f"umask 022 && {sys.executable} -m brdfremap.core.cli --source {GOLD} "
+                          f"--out {out} {' '.join(SMALL)} --quiet && {sys.executable} -m brdfremap.core.cli "
+                          f"render {GOLD} --out {tmp_path / 'r.exr'} --resolution 32 --quiet"],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    for f in [*out.iterdir(), tmp_path / "r.exr"]:
+        if f.name.startswith("."):
+            continue
+        assert stat.S_IMODE(f.stat().st_mode) == 0o644, (f.name, oct(f.stat().st_mode))
+
+
+def test_render_writes_through_a_link_and_keeps_it(tmp_path, mitsuba_adapter):
+    real = tmp_path / "real.exr"
+    real.write_bytes(b"old")
+    os.symlink(real, tmp_path / "link.exr")
+    assert remap("render", GOLD, "--out", tmp_path / "link.exr", "--resolution", "32").returncode == 0
+    assert (tmp_path / "link.exr").is_symlink() and real.stat().st_size > 100
+    one_line_error(remap("render", GOLD, "--out", tmp_path / "nope" / ".." / "file.txt"), ".exr")
+
+
+def test_a_remap_into_a_running_sweeps_point_is_refused(tmp_path, mitsuba_adapter):
+    from brdfremap.core.store import owned
+
+    with owned(tmp_path / "sweep"):
+        proc = remap("--source", GOLD, "--out", tmp_path / "sweep" / "points" / "00-003", *SMALL)
+    one_line_error(proc, "which another brdf-remap run is writing")
