@@ -13,7 +13,6 @@ from typing import Any, Callable, Iterator
 
 from .errors import ConfigError
 
-
 MAX_JOBS = 256
 
 

@@ -3,7 +3,6 @@
 import json
 
 import pytest
-
 from helpers import MATERIALS, one_line_error, remap
 
 GOLD = MATERIALS / "gold.yaml"

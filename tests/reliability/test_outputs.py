@@ -9,7 +9,6 @@ import sys
 import time
 
 import pytest
-
 from brdfremap.core.store import Store
 from helpers import MATERIALS, SmallFilesystem, fill, one_line_error, remap
 

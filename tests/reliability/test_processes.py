@@ -10,7 +10,6 @@ import time
 from pathlib import Path
 
 import pytest
-
 from brdfremap.core.scene import ProbeScene
 from brdfremap.core.workerproc import JsonLinesWorker
 from helpers import MATERIALS, SmallFilesystem, fill, one_line_error, remap
