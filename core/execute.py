@@ -22,7 +22,6 @@ import numpy as np
 from .engine import ProgressFn, remap
 from .imageio import write_exr, write_previews
 from .job import Job, Resolved, resolve
-from .metrics import error_map
 from .plugins import AdapterRegistry, collect_adapters
 from .protocol import Adapter
 from .renders import CachedRenderer, ProbeRenders
@@ -127,7 +126,7 @@ def artifacts(adapter: Adapter, model: str, params: dict[str, Value], source: np
         d = Path(tmp)
         write_exr(d / "source.exr", source)
         write_exr(d / "target.exr", target)
-        write_previews(d, source, target, error_map(source, target))
+        write_previews(d, source, target)
         paths = [d / n for n in ("source.exr", "target.exr", "source.png", "target.png", "error.png")]
         paths += [Path(p) for p in adapter.write_native(model, params, d)]
         return {p.name: p.read_bytes() for p in paths}

@@ -34,3 +34,14 @@ def brdfremap_register_schemas(register):
 
     Call ``register(name, model)`` with a pydantic model class per format (e.g. ``renderer``
     for a renderer definition file). The host rejects a name registered twice."""
+
+
+@hookspec
+def brdfremap_register_formats(register_reader, register_writer):
+    """Register library file formats (`remap convert`).
+
+    Call ``register_reader(reader)`` for each format this plugin reads (an object with ``name``,
+    ``suffixes``, ``accepts(path)`` and ``read(path) -> list[Entry]``; see
+    ``brdfremap.core.library.formats``) and ``register_writer(writer)`` for each native library
+    it writes (``name``, ``adapter``, ``models``, ``write(folder, items) -> list[Path]``). A
+    reader must not run any program a file names, and must name the file in its errors."""

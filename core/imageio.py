@@ -12,7 +12,6 @@ import numpy as np
 
 from .atomic import temp_beside
 from .errors import RemapError
-from .metrics import exposure
 
 
 def _write(path: Path, pixels: np.ndarray, fmt: str) -> None:
@@ -84,32 +83,83 @@ def read_image(path: Path) -> np.ndarray:
     return pixels
 
 
-def _srgb(x: np.ndarray) -> np.ndarray:
-    x = np.clip(x, 0.0, 1.0)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+DISPLAY, VIEW, LINEAR = "sRGB - Display", "ACES 1.0 - SDR Video", "Linear Rec.709 (sRGB)"
+"""The display transform of previews: OpenColorIO's ACES 1.0 SDR view for an sRGB display, from
+the configuration OpenImageIO ships (a filmic curve: highlights roll off instead of clipping)."""
+PREVIEW_SIZE = 256
+_LUMA = np.array([0.2126, 0.7152, 0.0722])
 
 
-def preview(image: np.ndarray, scale: float, compress: float = 30.0) -> np.ndarray:
-    """Linear image to 8-bit sRGB. ``scale`` maps the reference's bright end to 1 (shared by
-    source and target); a log curve then lifts the dim body of the sphere next to a sharp
-    highlight, which a linear preview shows as black."""
-    x = np.clip(np.asarray(image, np.float64) * scale, 0.0, None)
-    x = np.log1p(compress * x) / np.log1p(compress)
-    return (np.round(_srgb(x) * 255)).astype(np.uint8)
+def display_exposure(source: np.ndarray) -> float:
+    """The scale shared by a source and its remap: the source's lit pixels' 99th-percentile
+    luminance becomes 1 (the tone curve's shoulder takes a sharp highlight above it)."""
+    lum = np.asarray(source, np.float64) @ _LUMA
+    lit = lum[lum > 1e-6 * max(float(lum.max()), 1e-30)]
+    top = float(np.percentile(lit, 99)) if lit.size else 0.0
+    return 1.0 / top if top > 0 else 1.0
 
 
-def error_preview(err: np.ndarray, full_scale: float = 0.1) -> np.ndarray:
-    """Per-pixel error (0..full_scale) as a black-red-yellow-white ramp."""
+def preview(image: np.ndarray, scale: float) -> np.ndarray:
+    """Linear RGB, scaled, through the display transform: 8-bit sRGB, at least PREVIEW_SIZE
+    pixels across (each rendered pixel repeated: nothing interpolated)."""
+    import OpenImageIO as oiio
+
+    buf = oiio.ImageBuf(np.ascontiguousarray(np.clip(np.asarray(image, np.float32) * scale, 0.0, None)))
+    shown = oiio.ImageBufAlgo.ociodisplay(buf, DISPLAY, VIEW, LINEAR)
+    if shown.has_error:
+        raise RemapError(f"display transform failed: {shown.geterror()}")
+    px = np.clip(shown.get_pixels(oiio.FLOAT)[..., :3], 0.0, 1.0)
+    return _enlarge(np.round(px * 255).astype(np.uint8))
+
+
+def _enlarge(px: np.ndarray) -> np.ndarray:
+    k = -(-PREVIEW_SIZE // px.shape[0])
+    return np.repeat(np.repeat(px, k, axis=0), k, axis=1) if k > 1 else px
+
+
+def error_scale(err: np.ndarray) -> float:
+    """The error map's full scale: its 99th percentile where there is error, rounded up to 1, 2
+    or 5 times a power of ten (and at least 1 %)."""
+    e = err[err > 0]
+    top = max(float(np.percentile(e, 99)) if e.size else 0.0, 0.01)
+    mag = 10 ** np.floor(np.log10(top))
+    return float(next(m * mag for m in (1, 2, 5, 10) if m * mag >= top - 1e-12))
+
+
+def error_preview(err: np.ndarray, full_scale: float) -> np.ndarray:
+    """Per-pixel error (0..full_scale) as a black-red-yellow-white ramp, with a colour bar on the
+    right and its scale written on it."""
     t = np.clip(err / full_scale, 0.0, 1.0)[..., None]
-    return (np.round(np.clip(np.concatenate([3 * t, 3 * t - 1, 3 * t - 2], axis=-1), 0, 1) * 255)).astype(np.uint8)
+    ramp = lambda t: np.clip(np.concatenate([3 * t, 3 * t - 1, 3 * t - 2], axis=-1), 0, 1)  # noqa: E731
+    img = _enlarge(np.round(ramp(t) * 255).astype(np.uint8))
+    h = img.shape[0]
+    bar = np.zeros((h, 64, 3), np.uint8)
+    column = ramp(np.linspace(1.0, 0.0, h)[:, None, None])[:, 0, :]
+    bar[8:h - 8, 6:22] = np.round(column[8:h - 8, None, :] * 255).astype(np.uint8)
+    return _label(np.concatenate([img, bar], axis=1), [(img.shape[1] + 24, 18, f"{100 * full_scale:.3g}%"),
+                                                       (img.shape[1] + 24, h - 8, "0")])
+
+
+def _label(px: np.ndarray, texts: list[tuple[int, int, str]]) -> np.ndarray:
+    import OpenImageIO as oiio
+
+    buf = oiio.ImageBuf(np.ascontiguousarray(px.astype(np.float32) / 255.0))
+    for x, y, text in texts:
+        oiio.ImageBufAlgo.render_text(buf, x, y, text, 14, "", (1.0, 1.0, 1.0))
+    return np.round(np.clip(buf.get_pixels(oiio.FLOAT)[..., :3], 0, 1) * 255).astype(np.uint8)
 
 
 def write_png(path: Path, pixels8: np.ndarray) -> None:
     _write(path, np.ascontiguousarray(pixels8), "uint8")
 
 
-def write_previews(out_dir: Path, source: np.ndarray, target: np.ndarray, err: np.ndarray) -> None:
-    k = exposure(source)
+def write_previews(out_dir: Path, source: np.ndarray, target: np.ndarray) -> float:
+    """source.png, target.png (one exposure, from the source) and error.png; returns the error
+    map's full scale (a fraction of the source's bright end)."""
+    k = display_exposure(source)
     write_png(out_dir / "source.png", preview(source, k))
     write_png(out_dir / "target.png", preview(target, k))
-    write_png(out_dir / "error.png", error_preview(err))
+    err = np.abs((np.asarray(target, np.float64) - np.asarray(source, np.float64)) @ _LUMA) * k
+    scale = error_scale(err)
+    write_png(out_dir / "error.png", error_preview(err, scale))
+    return scale

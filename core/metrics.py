@@ -62,8 +62,3 @@ def delta_e_itp(reference: np.ndarray, test: np.ndarray) -> float:
     lit = (np.asarray(reference).max(axis=-1) > 0) | (np.asarray(test).max(axis=-1) > 0)
     return float(dmap[lit].mean()) if lit.any() else 0.0
 
-
-def error_map(reference: np.ndarray, test: np.ndarray) -> np.ndarray:
-    """Per-pixel |test - reference| luminance relative to the reference's bright end."""
-    d = np.abs((np.asarray(test, np.float64) - np.asarray(reference, np.float64)) @ _LUMA)
-    return d * exposure(reference)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import abc
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -12,6 +13,13 @@ from .appearance import Appearance
 from .errors import RenderError
 from .scene import ProbeScene
 from .schemas import ModelSpec, Value
+
+
+@dataclass(frozen=True)
+class ModelChoice:
+    model: str
+    fix: dict[str, Value]
+    why: str
 
 
 class Adapter(abc.ABC):
@@ -80,6 +88,12 @@ class Adapter(abc.ABC):
         conversion that depends on one the fit keeps. Only fitted parameters are used; values
         out of bounds are clipped by the caller. Must not render."""
         return {}
+
+    def model_for(self, appearance: Appearance) -> "ModelChoice | None":
+        """The model a material of this appearance converts to when the user names only this
+        adapter (`remap convert --to ADAPTER`), with the choices to hold (a distribution the
+        source has) and why, in words; None: no choice without a model named. Must not render."""
+        return None
 
     def notes(self, model: str, params: dict[str, Value]) -> list[str]:
         """What the renderer does to these parameters that the image cannot show the optimiser,

@@ -35,10 +35,12 @@ class Task:
 @dataclass(frozen=True)
 class Done:
     task: Task
-    report: Report
+    report: Report | None
+    """None when the job failed (``error`` says why)."""
     resumed: bool
     redone: str = ""
     """Why a result the slot held was not reused, when it held one."""
+    error: str = ""
 
 
 LineFn = Callable[[Done, int, int], str]
@@ -50,11 +52,13 @@ _Todo = tuple[int, Task, str]
 class Runner:
     def __init__(self, store: Store, workers: Workers, *, renderer_files: tuple[str, ...] = (),
                  line: LineFn | None = None, quiet: bool = False, render_progress: ProgressFn | None = None,
-                 reuse: bool = True):
+                 reuse: bool = True, stop_on_error: bool = True):
         """``render_progress``: per-render progress of a job run in this process. ``reuse``: take
-        a stored result of the same job instead of running it."""
+        a stored result of the same job instead of running it. ``stop_on_error``: a job that fails
+        (a renderer error) stops the run; else its `Done` says why and the others go on."""
         self.store, self.workers, self.renderer_files = store, workers, tuple(renderer_files)
         self.line, self.quiet, self.render_progress, self.reuse = line, quiet, render_progress, reuse
+        self.stop_on_error = stop_on_error
 
     def run(self, tasks: list[Task]) -> list[Done]:
         found: dict[int, Done] = {}
@@ -98,8 +102,10 @@ class Runner:
                     try:
                         found[i] = self._finish(fut, t, why)
                     except RemapError as exc:
-                        failure = failure or exc
-                        continue
+                        if self.stop_on_error:
+                            failure = failure or exc
+                            continue
+                        found[i] = Done(t, None, resumed=False, redone=why, error=str(exc))
                     bar.finished(self._line(found[i], bar))
         except BaseException:
             for fut in flight:

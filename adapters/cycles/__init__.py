@@ -8,3 +8,11 @@ def brdfremap_register_adapters(register):
     from .adapter import CyclesAdapter
 
     register("cycles", CyclesAdapter)
+
+
+@hookimpl
+def brdfremap_register_formats(register_reader, register_writer):
+    from .library import BlendLibraryWriter, BlendReader
+
+    register_reader(BlendReader())
+    register_writer(BlendLibraryWriter())

@@ -20,7 +20,7 @@ from brdfremap.core.appearance import Appearance
 from brdfremap.core.atomic import temp_beside, write_text_atomic
 from brdfremap.core.scratch import scratch_dir
 from brdfremap.core.errors import ConfigError, RenderError
-from brdfremap.core.protocol import Adapter
+from brdfremap.core.protocol import Adapter, ModelChoice
 from brdfremap.core.scene import ProbeScene
 from brdfremap.core.schemas import Value
 from brdfremap.core.workerproc import JsonLinesWorker
@@ -249,6 +249,9 @@ class CyclesAdapter(Adapter):
 
     def from_appearance(self, model: str, appearance: Appearance, base: dict[str, Value]) -> dict[str, Value]:
         return _appearance.from_appearance(model, appearance, base)
+
+    def model_for(self, appearance: Appearance) -> ModelChoice:
+        return ModelChoice(*_appearance.model_for(appearance))
 
     def write_native(self, model: str, params: dict[str, Value], out_dir: Path) -> list[Path]:
         out_dir = Path(out_dir)

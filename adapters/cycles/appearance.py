@@ -55,3 +55,15 @@ def from_appearance(model: str, a: Appearance, base: dict[str, Value]) -> dict[s
     else:
         return {}
     return out
+
+
+def model_for(a: Appearance) -> tuple[str, dict[str, Value], str]:
+    """The Cycles model that reproduces a material of this kind best: a metal's single specular
+    lobe is a Glossy BSDF of its distribution (same family: to the render noise), a diffuse-only
+    material a Diffuse BSDF, anything else the Principled BSDF."""
+    if a.kind == "conductor":
+        dist = a.distribution or "ggx"
+        return "glossy", {"distribution": dist}, f"a metal: one specular lobe, the Glossy BSDF ({dist})"
+    if a.alpha is None or max(a.specular) == 0.0:
+        return "diffuse", {}, "diffuse only: the Diffuse BSDF"
+    return "principled", {}, "a dielectric with a diffuse base: the Principled BSDF"

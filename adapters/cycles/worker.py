@@ -147,30 +147,40 @@ class BlenderState:
         self.probe = obj
 
     # -- materials ---------------------------------------------------------------------
-    def material(self, model: str, params: dict):
-        from brdfremap.adapters.cycles.material import FIXED_PROPS, NODES, enum_value, socket_value
+    def new_material(self, model: str, name: str):
+        """A material whose surface is the model's BSDF node: (material, node)."""
+        from brdfremap.adapters.cycles.material import FIXED_PROPS, NODES
 
-        node_type, inputs, props = NODES[model]
-        if model not in self.materials:
-            mat = self.bpy.data.materials.new(f"brdf-remap {model}")
-            mat.use_nodes = True
-            nodes = mat.node_tree.nodes
-            for n in list(nodes):
-                if n.type != "OUTPUT_MATERIAL":
-                    nodes.remove(n)
-            bsdf = nodes.new(node_type)
-            for prop, value in FIXED_PROPS.get(model, {}).items():
-                setattr(bsdf, prop, value)
-            out = next(n for n in nodes if n.type == "OUTPUT_MATERIAL")
-            mat.node_tree.links.new(bsdf.outputs[0], out.inputs["Surface"])
-            self.materials[model] = (mat, bsdf)
-        mat, bsdf = self.materials[model]
+        mat = self.bpy.data.materials.new(name)
+        mat.use_nodes = True
+        nodes = mat.node_tree.nodes
+        for n in list(nodes):
+            if n.type != "OUTPUT_MATERIAL":
+                nodes.remove(n)
+        bsdf = nodes.new(NODES[model][0])
+        for prop, value in FIXED_PROPS.get(model, {}).items():
+            setattr(bsdf, prop, value)
+        out = next(n for n in nodes if n.type == "OUTPUT_MATERIAL")
+        mat.node_tree.links.new(bsdf.outputs[0], out.inputs["Surface"])
+        return mat, bsdf
+
+    @staticmethod
+    def set_values(bsdf, model: str, params: dict) -> None:
+        from brdfremap.adapters.cycles.material import NODES, enum_value, socket_value
+
+        _, inputs, props = NODES[model]
         for pname, prop in props.items():
             value = enum_value(params[pname])
             if getattr(bsdf, prop) != value:
                 setattr(bsdf, prop, value)
         for pname, sock in inputs.items():
             bsdf.inputs[sock].default_value = socket_value(model, pname, params[pname])
+
+    def material(self, model: str, params: dict):
+        if model not in self.materials:
+            self.materials[model] = self.new_material(model, f"brdf-remap {model}")
+        mat, bsdf = self.materials[model]
+        self.set_values(bsdf, model, params)
         return mat
 
     # -- requests ----------------------------------------------------------------------
@@ -200,6 +210,29 @@ class BlenderState:
         mat.name = req.get("name", mat.name)
         self.bpy.data.libraries.write(req["path"], {mat}, fake_user=True)
         return {}
+
+    def save_library(self, req: dict) -> dict:
+        """One .blend holding a material per item, each under the item's name (Blender keeps 63
+        bytes of a name: the names it kept are answered)."""
+        mats, names = set(), []
+        for item in req["items"]:
+            mat, bsdf = self.new_material(item["model"], item["name"])
+            self.set_values(bsdf, item["model"], item["params"])
+            mats.add(mat)
+            names.append(mat.name)
+        self.bpy.data.libraries.write(req["path"], mats, fake_user=True)
+        for mat in mats:
+            self.bpy.data.materials.remove(mat)
+        return {"names": names}
+
+    def read_blend(self, req: dict) -> dict:
+        """Every material of a .blend, read without running anything the file holds (scripts off)."""
+        from brdfremap.adapters.cycles.blendread import read_materials
+
+        self.bpy.context.preferences.filepaths.use_scripts_auto_execute = False
+        self.bpy.ops.wm.open_mainfile(filepath=req["path"], load_ui=False, use_scripts=False)
+        self.scene_key, self.materials = None, {}  # the probe scene is gone: rebuilt at the next render
+        return {"materials": read_materials(self.bpy)}
 
 
 def main() -> int:
@@ -235,6 +268,10 @@ def main() -> int:
                 result = state.render(req)
             elif op == "save_blend":
                 result = state.save_blend(req)
+            elif op == "save_library":
+                result = state.save_library(req)
+            elif op == "read_blend":
+                result = state.read_blend(req)
             else:
                 raise ValueError(f"unknown op {op!r}")
             send({"id": req.get("id"), "ok": True, **result})

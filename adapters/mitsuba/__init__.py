@@ -15,3 +15,12 @@ def register_bsdfs() -> None:
     from .bsdfs import register_bsdfs as _register
 
     _register()
+
+
+@hookimpl
+def brdfremap_register_formats(register_reader, register_writer):
+    from .reader import MitsubaXmlReader
+    from .writer import MitsubaLibraryWriter
+
+    register_reader(MitsubaXmlReader())
+    register_writer(MitsubaLibraryWriter())

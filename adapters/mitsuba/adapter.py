@@ -15,7 +15,7 @@ from brdfremap.core.appearance import (Appearance, as_rgb, dielectric_f0, eta_k_
                                       reflectivity_edge_tint)
 from brdfremap.core.atomic import write_text_atomic
 from brdfremap.core.errors import ConfigError, RenderError
-from brdfremap.core.protocol import Adapter
+from brdfremap.core.protocol import Adapter, ModelChoice
 from brdfremap.core.scene import ProbeScene
 from brdfremap.core.schemas import Value
 
@@ -285,6 +285,9 @@ class MitsubaAdapter(Adapter):
 
     def from_appearance(self, model: str, appearance: Appearance, base: dict[str, Value]) -> dict[str, Value]:
         return _appearance.from_appearance(model, appearance)
+
+    def model_for(self, appearance: Appearance) -> ModelChoice:
+        return ModelChoice(*_appearance.model_for(appearance))
 
     def notes(self, model: str, params: dict[str, Value]) -> list[str]:
         return energy_notes(model, params)

@@ -89,3 +89,14 @@ def from_appearance(model: str, a: Appearance) -> dict[str, Value]:
     else:
         return {}
     return out
+
+
+def model_for(a: Appearance) -> tuple[str, dict[str, Value], str]:
+    """The Mitsuba model an exporter would pick: a metal is a rough conductor, a diffuse-only
+    material a diffuse BSDF, anything else a rough plastic; the source's distribution is held."""
+    fix: dict[str, Value] = {"distribution": a.distribution} if a.distribution in ("beckmann", "ggx") else {}
+    if a.kind == "conductor":
+        return "roughconductor", fix, "a metal (coloured specular, no diffuse)"
+    if a.alpha is None or max(a.specular) == 0.0:
+        return "diffuse", {}, "diffuse only (no specular lobe)"
+    return "roughplastic", fix, "a dielectric with a diffuse base"

@@ -16,7 +16,7 @@ EXIT_USAGE = 2
 
 
 def _dispatch(argv: list[str]) -> int:
-    from . import experiment_cmd, remap_cmd, tools
+    from . import convert_cmd, experiment_cmd, remap_cmd, tools
 
     head, rest = (argv[0], argv[1:]) if argv else ("", [])
     if head == "adapters":
@@ -25,6 +25,8 @@ def _dispatch(argv: list[str]) -> int:
         return tools.schema(tools.schema_parser().parse_args(rest))
     if head == "render":
         return tools.render(tools.render_parser().parse_args(rest))
+    if head == "convert":
+        return convert_cmd.run(convert_cmd.parser().parse_args(rest))
     if head in ("sweep", "roundtrip"):
         return experiment_cmd.run(head, experiment_cmd.parser(head).parse_args(rest))
     return remap_cmd.run(remap_cmd.parser().parse_args(argv))

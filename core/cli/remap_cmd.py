@@ -15,6 +15,7 @@ if TYPE_CHECKING:
 
 USAGE_EPILOG = """\
 other commands:
+  remap convert INPUT... --to ADAPTER[:MODEL] --out DIR   whole libraries (.xml, .blend, .mtlx), index.html
   remap adapters                          list adapters, their models, and why one is unavailable
   remap render MATERIAL.yaml --out IMAGE.exr   render one material on the probe, no fit
   remap sweep EXPERIMENT.yaml --out DIR   remap a family of source materials; CSV, plots, cliffs

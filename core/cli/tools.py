@@ -81,9 +81,8 @@ def render_parser() -> argparse.ArgumentParser:
 
 
 def render(args: argparse.Namespace) -> int:
-    from ..imageio import preview, write_exr, write_png
+    from ..imageio import display_exposure, preview, write_exr, write_png
     from ..job import model_of
-    from ..metrics import exposure
     from ..plugins import collect_adapters
     from ..protocol import check_image
     from ..schemas import load_material
@@ -107,7 +106,7 @@ def render(args: argparse.Namespace) -> int:
         adapter.close()
     try:
         if out.suffix.lower() == ".png":
-            write_png(out, preview(img, exposure(img)))
+            write_png(out, preview(img, display_exposure(img)))
         else:
             write_exr(out, img)
     except OSError as exc:

@@ -68,8 +68,9 @@ class _Run:
         """A polish's renders: its start, one Jacobian, and a few steps."""
         return 1 + space.jacobian_renders(self.tuning.separable_rgb) + self.tuning.fine_steps
 
-    def assess(self, state: "_State") -> Assessment:
-        return assess(self.target, state.params, self.free, self.fine, self.tuning, self.tally,
+    def assess(self, state: "_State", level: Level | None = None) -> Assessment:
+        """The Jacobian checks at ``level`` (default: the fine level, where stages are polished)."""
+        return assess(self.target, state.params, self.free, level or self.fine, self.tuning, self.tally,
                       jacobian_updates=self.settings.jacobian_updates, seed=state.last, held=state.held,
                       good_enough=self.good_enough)
 
@@ -245,7 +246,9 @@ def _polish_noise_limited(run: _Run, state: _State, assessment: Assessment) -> t
     run.notes.append(NoisePolished(error=state.err, source_noise=run.source_noise, factor=run.tuning.precise_below,
                                    spp=scene.spp * k, before=stage.result.start_error, after=stage.result.error))
     state = _State(params, image, err, stage)
-    return state, run.assess(state)
+    # Checked where these parameters were chosen: at the scene's samples the render noise the
+    # polish removed would make the shift it made look like a step away from a minimum.
+    return state, run.assess(state, level)
 
 
 def _conclude(run: _Run, plan: Plan, state: _State, assessment: Assessment, joint: _Joint, t0: float) -> EngineResult:

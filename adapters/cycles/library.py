@@ -1,0 +1,86 @@
+"""`.blend` files as libraries: read (every material whose surface is one of the adapter's BSDF
+nodes) and written (one .blend holding every converted material under its source's name), each
+through a Blender worker process of its own, never bpy in this process."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from brdfremap.core.atomic import temp_beside, write_text_atomic
+from brdfremap.core.errors import ConfigError, RenderError
+from brdfremap.core.library.formats import Converted, Entry, clip_into
+from brdfremap.core.schemas import Material
+from brdfremap.core.workerproc import JsonLinesWorker
+
+from .material import python_snippet
+from .models import MODELS
+
+BLEND_MAGIC = (b"BLENDER", b"\x28\xb5\x2f\xfd")  # a .blend, or a zstd-compressed one
+
+
+def _worker(what: str) -> JsonLinesWorker:
+    from .adapter import CyclesAdapter
+
+    reason = CyclesAdapter.unavailable_reason()
+    if reason:
+        raise ConfigError(f"{what} needs Blender's bpy module: {reason}; {CyclesAdapter.install_hint}")
+    return JsonLinesWorker([sys.executable, "-m", "brdfremap.adapters.cycles.worker"], name=f"cycles ({what})")
+
+
+class BlendReader:
+    name = "Blender (.blend)"
+    suffixes = (".blend",)
+
+    def accepts(self, path: Path) -> bool:
+        try:
+            with open(path, "rb") as f:
+                return f.read(7).startswith(BLEND_MAGIC)
+        except OSError:
+            return True  # read() names the file and the reason
+
+    def read(self, path: Path) -> list[Entry]:
+        if not self.accepts(path):
+            raise ConfigError("is not a .blend file (no BLENDER header)", file=str(path))
+        worker = _worker("reading a .blend")
+        try:
+            found = worker.request({"op": "read_blend", "path": str(Path(path).resolve())}, timeout=300)["materials"]
+        except RenderError as exc:
+            raise ConfigError(f"Blender cannot read it: {str(exc).splitlines()[0]}", file=str(path)) from None
+        finally:
+            worker.close()
+        return [_entry(m, str(path)) for m in found]
+
+
+def _entry(m: dict, file: str) -> Entry:
+    if m["model"] is None:
+        return Entry(name=m["name"], file=file, problem=m["problem"], notes=m["notes"])
+    params = {k: tuple(v) if isinstance(v, list) else v for k, v in m["params"].items()}
+    try:
+        notes = clip_into(MODELS[m["model"]], params) + m["notes"]
+    except ConfigError as exc:
+        return Entry(name=m["name"], file=file, problem=str(exc), notes=m["notes"])
+    return Entry(name=m["name"], file=file, notes=notes, textured=m["textured"],
+                 material=Material(adapter="cycles", model=m["model"], params=params, name=m["name"]))
+
+
+class BlendLibraryWriter:
+    name = "Blender library (.blend)"
+    adapter = "cycles"
+    models: tuple[str, ...] = ()
+
+    def write(self, folder: Path, items: list[Converted]) -> list[Path]:
+        blend = Path(folder) / "library.blend"
+        tmp = temp_beside(blend)
+        payload = [{"name": i.name, "model": i.model,
+                    "params": {k: list(v) if isinstance(v, tuple) else v for k, v in
+                               MODELS[i.model].complete(i.params).items()}} for i in items]
+        worker = _worker("writing library.blend")
+        try:
+            worker.request({"op": "save_library", "items": payload, "path": str(tmp.resolve())}, timeout=600)
+            tmp.replace(blend)
+        finally:
+            worker.close()
+            tmp.unlink(missing_ok=True)
+        script = "\n\n".join(python_snippet(i.model, MODELS[i.model].complete(i.params), i.name) for i in items)
+        return [blend, write_text_atomic(Path(folder) / "library.py", script)]

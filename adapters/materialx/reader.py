@@ -1,0 +1,125 @@
+"""MaterialX documents as libraries, through the `materialx` package: documents of older
+versions are upgraded on reading, each is validated against the standard libraries, and every
+material's surface shader (standard_surface, open_pbr_surface, gltf_pbr, UsdPreviewSurface) is
+read as the Cycles Principled BSDF by the correspondence in `correspondence.py`."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from brdfremap.core.errors import ConfigError
+from brdfremap.core.library.formats import Entry, clip_into
+from brdfremap.core.schemas import Material
+
+from .correspondence import HALF, QUIET, TO_PRINCIPLED
+
+NOTE = ("read as Blender Cycles' Principled BSDF by the {shader} correspondence (Blender's Principled BSDF "
+        "follows OpenPBR): MaterialX has no renderer of its own here")
+
+
+def mx():
+    try:
+        import MaterialX
+    except ImportError:
+        raise ConfigError("reading MaterialX needs the materialx package: pip install 'materialx==1.39.*'") from None
+    return MaterialX
+
+
+def standard_libraries():
+    m = mx()
+    lib = m.createDocument()
+    m.loadLibraries(m.getDefaultDataLibraryFolders(), m.getDefaultDataSearchPath(), lib)
+    return lib
+
+
+class MaterialXReader:
+    name = "MaterialX (.mtlx)"
+    suffixes = (".mtlx",)
+
+    def accepts(self, path: Path) -> bool:
+        return True
+
+    def read(self, path: Path) -> list[Entry]:
+        m = mx()
+        doc = m.createDocument()
+        try:
+            m.readFromXmlFile(doc, str(path))  # upgrades an older document to this version
+        except Exception as exc:  # the library's parse and file errors share no base class
+            raise ConfigError(f"cannot read it as MaterialX: {str(exc).splitlines()[0]}", file=str(path)) from None
+        doc.importLibrary(standard_libraries())
+        valid, why = doc.validate()
+        if not valid:
+            raise ConfigError(f"is not valid MaterialX: {why.strip().splitlines()[0]}", file=str(path))
+        return [self._entry(m, mat, str(path)) for mat in doc.getMaterialNodes()]
+
+    def _entry(self, m, mat, file: str) -> Entry:
+        name = mat.getName()
+        shaders = [s for s in m.getShaderNodes(mat) if s.getType() == "surfaceshader"]
+        if not shaders:
+            return Entry(name=name, file=file, problem="no surface shader")
+        shader = shaders[0]
+        category = shader.getCategory()
+        if category not in TO_PRINCIPLED:
+            return Entry(name=name, file=file, problem=f"shader {category!r} has no correspondence here (known: "
+                                                        f"{', '.join(TO_PRINCIPLED)})")
+        params, textured, notes = _principled(shader, category)
+        notes.insert(0, NOTE.format(shader=category))
+        return Entry(name=name, file=file, notes=notes, textured=textured,
+                     material=Material(adapter="cycles", model="principled", params=params, name=name))
+
+
+def _principled(shader, category: str) -> tuple[dict, list[str], list[str]]:
+    """The Principled values of a shader node, the inputs driven by a graph, and the notes."""
+    from brdfremap.adapters.cycles.models import PRINCIPLED
+
+    nodedef = shader.getNodeDef()
+    used, textured = set(), []
+
+    def value(name: str):
+        used.add(name)
+        inp = shader.getInput(name)
+        if inp is not None and (inp.getConnectedNode() is not None or inp.hasNodeGraphString()
+                                or inp.hasOutputString() or inp.hasInterfaceName()):
+            textured.append(f"{name} <- {_source(inp)}")
+            inp = None
+        got = inp.getValue() if inp is not None and inp.hasValueString() else nodedef.getActiveInput(name).getValue()
+        # MaterialX keeps 32-bit floats: 0.944 comes back as 0.94400000572; 7 digits are what was written.
+        return tuple(_r(x) for x in got.asTuple()) if hasattr(got, "asTuple") else _r(got)
+
+    params: dict = {}
+    for pname, names in TO_PRINCIPLED[category].items():
+        vals = [value(n) for n in names]
+        v = vals[0]
+        if len(vals) == 2:  # a colour times its weight
+            v = tuple(c * float(vals[1]) for c in v)
+        params[pname] = v / 2.0 if pname in HALF else v
+    notes = clip_into(PRINCIPLED, params) + _unused(shader, nodedef, used)
+    return params, textured, notes
+
+
+def _r(x) -> float:
+    return float(f"{float(x):.7g}")
+
+
+def _source(inp) -> str:
+    node = inp.getConnectedNode()
+    if node is None:
+        return f"node graph {inp.getNodeGraphString() or inp.getInterfaceName()!r}"
+    if node.getCategory() in ("image", "tiledimage"):
+        f = node.getInput("file")
+        return f"{node.getCategory()} {f.getValueString() if f is not None else ''!r}"
+    return f"{node.getCategory()} node {node.getName()!r}"
+
+
+def _unused(shader, nodedef, used: set[str]) -> list[str]:
+    """Inputs given away from their default that the Principled model has no counterpart for."""
+    out = []
+    for inp in shader.getInputs():
+        name = inp.getName()
+        if name in used or name in QUIET:
+            continue
+        default = nodedef.getActiveInput(name)
+        shown = inp.getValueString() if inp.hasValueString() else "a node graph"
+        if default is None or not inp.hasValueString() or inp.getValueString() != default.getValueString():
+            out.append(f"{name} = {shown} has no counterpart in the Principled model here: ignored")
+    return out

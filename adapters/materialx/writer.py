@@ -1,0 +1,44 @@
+"""A library converted to Cycles' Principled BSDF, also as one MaterialX document: an
+open_pbr_surface and a surfacematerial per material, validated against the standard libraries
+before it is written."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from brdfremap.core.atomic import write_text_atomic
+from brdfremap.core.errors import RenderError
+from brdfremap.core.library.formats import Converted
+
+from .correspondence import open_pbr_inputs
+from .reader import mx, standard_libraries
+
+
+class MaterialXWriter:
+    name = "MaterialX library (open_pbr_surface)"
+    adapter = "cycles"
+    models = ("principled",)
+
+    def write(self, folder: Path, items: list[Converted]) -> list[Path]:
+        from brdfremap.adapters.cycles.models import PRINCIPLED
+
+        m = mx()
+        doc = m.createDocument()
+        doc.setDocString("brdf-remap: converted materials as OpenPBR (Blender's Principled BSDF follows OpenPBR)")
+        for item in items:
+            if item.model != "principled":
+                continue
+            params = PRINCIPLED.complete(item.params)
+            name = doc.createValidChildName(item.name)
+            shader = doc.addNode("open_pbr_surface", doc.createValidChildName(f"{name}_shader"), "surfaceshader")
+            for key, v in open_pbr_inputs(params).items():
+                shader.setInputValue(key, m.Color3(*v) if isinstance(v, tuple) else float(v))
+            material = doc.addMaterialNode(name, shader)
+            material.setDocString(f"source material: {item.name}")
+        check = m.createDocument()
+        check.copyContentFrom(doc)
+        check.importLibrary(standard_libraries())
+        valid, why = check.validate()
+        if not valid:
+            raise RenderError(f"the MaterialX library did not validate: {why.strip().splitlines()[0]}")
+        return [write_text_atomic(Path(folder) / "library.mtlx", m.writeToXmlString(doc))]

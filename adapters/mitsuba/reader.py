@@ -1,0 +1,233 @@
+"""Mitsuba 3 scene files as libraries: every `<bsdf>` of a scene, read without Mitsuba.
+
+As Mitsuba reads them: `<default>` values and `$name` substitution, `<include>`d files,
+`<ref>`s followed, `twosided` (and bump and normal maps, opacity masks) unwrapped with a
+note, RGB and uniform spectra, named IORs and conductor presets, and Mitsuba's own defaults
+for what a BSDF leaves out. A BSDF of a type the adapter has no model for is listed with the
+reason; the rest go on. Parsed with the standard library's XML parser: no entity or external
+reference is resolved, and nothing a file names is run."""
+
+from __future__ import annotations
+
+import math
+import re
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from brdfremap.core.errors import ConfigError
+from brdfremap.core.library.formats import Entry, clip_into
+from brdfremap.core.schemas import Material
+
+from .models import MODELS
+
+NAMED_IOR = {"vacuum": 1.0, "helium": 1.00004, "hydrogen": 1.00013, "air": 1.000277, "carbon dioxide": 1.00045,
+             "water": 1.3330, "acetone": 1.36, "ethanol": 1.361, "carbon tetrachloride": 1.461, "glycerol": 1.4729,
+             "benzene": 1.501, "silicone oil": 1.52045, "bromine": 1.661, "water ice": 1.31, "fused quartz": 1.458,
+             "pyrex": 1.470, "acrylic glass": 1.49, "polypropylene": 1.49, "bk7": 1.5046, "sodium chloride": 1.544,
+             "amber": 1.55, "pet": 1.5750, "diamond": 2.419}
+WRAPPERS = {"twosided": "two-sided (unwrapped)", "bumpmap": "its bump map is ignored",
+            "normalmap": "its normal map is ignored", "mask": "its opacity mask is ignored"}
+SMOOTH = {"conductor": "roughconductor", "plastic": "roughplastic"}
+"""Smooth BSDFs read as the rough model at its lowest roughness."""
+NOT_YET = {"dielectric": "glass", "roughdielectric": "rough glass", "thindielectric": "thin glass",
+           "blendbsdf": "a blend of two BSDFs", "measured": "a measured BRDF", "hair": "hair",
+           "pplastic": "polarized plastic", "polarizer": "a polarizer", "retarder": "a retarder", "null": "a null BSDF"}
+IGNORED = {"sample_visible", "nonlinear"}
+_SUBST = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
+
+
+class MitsubaXmlReader:
+    name = "Mitsuba 3 scene (XML)"
+    suffixes = (".xml",)
+
+    def accepts(self, path: Path) -> bool:
+        try:
+            with open(path, "rb") as f:
+                head = f.read(4096)
+        except OSError:
+            return True  # read() names the file and the reason
+        return b"<scene" in head
+
+    def read(self, path: Path) -> list[Entry]:
+        doc = _Document(path)
+        return [_entry(doc, elem, name, str(path)) for elem, name in doc.bsdfs()]
+
+
+class _Document:
+    """A scene with its includes inlined, `$name` substituted and BSDFs and textures by id."""
+
+    def __init__(self, path: Path):
+        self.path = path
+        self.root = _parse(path)
+        if self.root.tag != "scene":
+            raise ConfigError(f"the root element is <{self.root.tag}>, not <scene>: not a Mitsuba scene", file=str(path))
+        self._inline(self.root, path, depth=0)
+        defaults = {d.get("name", ""): d.get("value", "") for d in self.root.findall("default")}
+        for elem in self.root.iter():
+            for k, v in elem.attrib.items():
+                if "$" in v:
+                    elem.set(k, _substitute(v, defaults, path))
+        self.ids = {e.get("id"): e for e in self.root.iter() if e.get("id") and e.tag in ("bsdf", "texture")}
+
+    def _inline(self, parent: ET.Element, path: Path, depth: int) -> None:
+        for i, child in enumerate(list(parent)):
+            if child.tag != "include":
+                continue
+            if depth > 8:
+                raise ConfigError("includes nest deeper than 8 (a loop?)", file=str(path))
+            inc = path.parent / child.get("filename", "")
+            sub = _parse(inc)
+            self._inline(sub, inc, depth + 1)
+            parent.remove(child)
+            for j, e in enumerate(sub):
+                parent.insert(i + j, e)
+
+    def bsdfs(self) -> list[tuple[ET.Element, str]]:
+        """Every material of the scene: top-level BSDFs by id, anonymous ones inside shapes named
+        after their shape (a shape's `<ref>` to a top-level one adds nothing)."""
+        out, n = [], 0
+        for elem in self.root:
+            if elem.tag == "bsdf":
+                n += 1
+                out.append((elem, elem.get("id") or f"bsdf {n}"))
+            elif elem.tag == "shape":
+                for b in elem.findall("bsdf"):
+                    shape = elem.get("id") or f"{elem.get('type', 'shape')} {len(out) + 1}"
+                    out.append((b, b.get("id") or shape))
+        return out
+
+    def ref(self, elem: ET.Element) -> ET.Element:
+        target = self.ids.get(elem.get("id", ""))
+        if target is None:
+            raise ConfigError(f"<ref id={elem.get('id')!r}> names nothing in the scene", file=str(self.path))
+        return target
+
+
+def _parse(path: Path) -> ET.Element:
+    try:
+        return ET.parse(path).getroot()
+    except ET.ParseError as exc:
+        line, col = exc.position
+        what = str(exc).rsplit(": line ", 1)[0]  # the parser's words, without the position given apart
+        raise ConfigError(f"malformed XML: {what}", file=str(path), field=f"line {line}, column {col + 1}") from None
+    except OSError as exc:
+        raise ConfigError(f"cannot read: {exc.strerror or exc}", file=str(path)) from None
+
+
+def _substitute(text: str, defaults: dict[str, str], path: Path) -> str:
+    def one(m: re.Match) -> str:
+        if m.group(1) not in defaults:
+            raise ConfigError(f"${m.group(1)} is used but no <default name={m.group(1)!r}> gives it a value",
+                              file=str(path))
+        return defaults[m.group(1)]
+
+    return _SUBST.sub(one, text)
+
+
+def _entry(doc: _Document, elem: ET.Element, name: str, file: str) -> Entry:
+    notes: list[str] = []
+    elem = _unwrap(doc, elem, notes)
+    kind = elem.get("type", "")
+    model = SMOOTH.get(kind, kind)
+    if model not in MODELS:
+        why = f"{NOT_YET[kind]} ({kind}) is not supported yet" if kind in NOT_YET else \
+            f"Mitsuba BSDF type {kind!r} has no model here (models: {', '.join(sorted(MODELS))})"
+        return Entry(name=name, file=file, problem=why, notes=notes)
+    try:
+        params, textured = _params(doc, elem, model, notes)
+    except ConfigError as exc:
+        return Entry(name=name, file=file, problem=str(exc), notes=notes)
+    if kind in SMOOTH:
+        params["alpha"] = MODELS[model].param("alpha").lower
+        notes.append(f"a smooth {kind}: read as {model} at its lowest roughness (alpha {params['alpha']:g})")
+    return Entry(name=name, file=file, material=Material(adapter="mitsuba", model=model, params=params, name=name),
+                 notes=notes, textured=textured)
+
+
+def _unwrap(doc: _Document, elem: ET.Element, notes: list[str]) -> ET.Element:
+    for _ in range(8):
+        if elem.tag == "ref":
+            elem = doc.ref(elem)
+        kind = elem.get("type", "")
+        if kind not in WRAPPERS:
+            return elem
+        notes.append(f"{kind}: {WRAPPERS[kind]}")
+        inner = [c for c in elem if c.tag in ("bsdf", "ref")]
+        if not inner:
+            return elem
+        elem = inner[0]
+    return elem
+
+
+def _params(doc: _Document, elem: ET.Element, model: str, notes: list[str]) -> tuple[dict, list[str]]:
+    """The model's parameters from the BSDF's properties (Mitsuba's defaults for the rest)."""
+    spec = MODELS[model]
+    params: dict = {}
+    textured: list[str] = []
+    aniso = {}
+    for prop in elem:
+        name = prop.get("name", "")
+        if prop.tag in ("texture", "ref"):
+            textured.append(_texture(doc, prop, name))
+            continue
+        value = _value(prop)
+        if name in ("alpha_u", "alpha_v"):
+            aniso[name] = value
+        elif name in ("int_ior", "ext_ior") and isinstance(value, str):
+            params[name] = _named_ior(value)
+        elif name in spec.names:
+            params[name] = value
+        elif name not in IGNORED:
+            notes.append(f"{name} = {prop.get('value')} has no counterpart in the {model!r} model: ignored")
+    if aniso:
+        au, av = float(aniso.get("alpha_u", 0.1)), float(aniso.get("alpha_v", 0.1))
+        params["alpha"] = math.sqrt(au * av)
+        notes.append(f"anisotropic (alpha_u {au:g}, alpha_v {av:g}): read as isotropic alpha {params['alpha']:.4g}")
+    ext = params.pop("ext_ior", None)
+    if ext is not None and abs(float(ext) - NAMED_IOR["air"]) > 1e-3:
+        notes.append(f"ext_ior {float(ext):g} is read as air (the model's exterior)")
+    if model in ("roughconductor",) and params.get("material", "none") == "none":
+        params.setdefault("eta", (0.0, 0.0, 0.0))  # Mitsuba's default: a perfect mirror (eta 0, k 1)
+        params.setdefault("k", (1.0, 1.0, 1.0))
+    notes += clip_into(spec, params)
+    return params, textured
+
+
+def _value(prop: ET.Element):
+    v = prop.get("value", "")
+    if prop.tag in ("float", "integer"):
+        return float(v)
+    if prop.tag == "boolean":
+        return "true" if v.strip().lower() in ("true", "1") else "false"
+    if prop.tag in ("rgb", "spectrum", "color"):
+        return _colour(prop.tag, v)
+    return v
+
+
+def _colour(tag: str, text: str) -> tuple[float, float, float]:
+    t = text.strip()
+    if t.startswith("#") and len(t) == 7:
+        return tuple(int(t[i:i + 2], 16) / 255.0 for i in (1, 3, 5))  # type: ignore[return-value]
+    if ":" in t:  # wavelength:value pairs: their mean, as a grey (a spectrum has no RGB without a colour model)
+        vals = [float(p.split(":")[1]) for p in re.split(r"[,\s]+", t) if ":" in p]
+        m = sum(vals) / len(vals)
+        return (m, m, m)
+    vals = [float(x) for x in re.split(r"[,\s]+", t) if x]
+    return (vals[0],) * 3 if len(vals) == 1 else tuple(vals[:3])  # type: ignore[return-value]
+
+
+def _texture(doc: _Document, prop: ET.Element, name: str) -> str:
+    tex = doc.ref(prop) if prop.tag == "ref" else prop
+    file = next((s.get("value") for s in tex.iter("string") if s.get("name") == "filename"), None)
+    what = f"{tex.get('type', 'texture')} {file!r}" if file else tex.get("type", "texture")
+    return f"{name} <- {what}"
+
+
+def _named_ior(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        pass
+    if text.lower() not in NAMED_IOR:
+        raise ConfigError(f"unknown named IOR {text!r} (known: {', '.join(NAMED_IOR)})")
+    return NAMED_IOR[text.lower()]

@@ -1,0 +1,190 @@
+"""`remap convert`: a library's materials, each an ordinary job through the store and the runner,
+written back as one native library per target, with a report (index.html).
+
+The output folder holds `materials/<slot>/` (each material's result), the libraries the target's
+writers make (`library.blend`, `library.xml`, `library.mtlx`), `convert.json` (every material:
+converted, failed or unsupported, and why) and `index.html`. Rerun after an interruption and
+only the unfinished materials run; change an input and only what changed runs again."""
+
+from __future__ import annotations
+
+import hashlib
+import re
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..atomic import write_json_atomic
+from ..errors import ConfigError, RemapError
+from ..execute import AdapterPool
+from ..executors import Workers
+from ..job import Job, Target, Where, resolve
+from ..plugins import AdapterRegistry
+from ..runner import Done, Runner, Task
+from ..scene import ProbeScene
+from ..settings import Settings
+from ..store import Store, owned
+from .formats import Converted, Entry, Formats
+
+
+@dataclass(frozen=True)
+class Destination:
+    adapter: str
+    model: str | None
+    """None: the adapter chooses per material (`Adapter.model_for`)."""
+
+    @classmethod
+    def parse(cls, text: str, registry: AdapterRegistry) -> "Destination":
+        adapter, _, model = text.partition(":")
+        entry = registry.get(adapter, field_name="--to")
+        if model and model not in entry.models:
+            raise ConfigError(f"adapter {adapter!r} has no model {model!r} (models: {', '.join(sorted(entry.models))})",
+                              field="--to")
+        return cls(adapter, model or None)
+
+
+@dataclass
+class Item:
+    """One material of the library and what became of it."""
+
+    entry: Entry
+    slot: str = ""
+    model: str = ""
+    why: str = ""
+    """Why this target model (when the adapter chose it)."""
+    task: Task | None = None
+    done: Done | None = None
+    failure: str = ""
+
+    @property
+    def status(self) -> str:
+        if self.entry.problem:
+            return "unsupported"
+        if self.failure or (self.done is not None and self.done.report is None):
+            return "failed"
+        return self.done.report.verdict if self.done is not None else "pending"
+
+    @property
+    def reason(self) -> str:
+        return self.entry.problem or self.failure or (self.done.error if self.done is not None else "")
+
+
+@dataclass
+class Conversion:
+    items: list[Item]
+    destination: Destination
+    libraries: list[Path] = field(default_factory=list)
+    library_notes: list[str] = field(default_factory=list)
+    seconds: float = 0.0
+    where: str = ""
+
+    @property
+    def failed(self) -> list[Item]:
+        return [i for i in self.items if i.status in ("failed", "unsupported")]
+
+
+def slot_of(name: str) -> str:
+    """A folder name for a material: readable, and unique even where names differ only in
+    characters a folder name cannot hold."""
+    safe = re.sub(r"[^A-Za-z0-9._-]+", "_", name).strip("._")[:48] or "material"
+    return f"{safe}-{hashlib.sha1(name.encode()).hexdigest()[:6]}"
+
+
+def plan(entries: list[Entry], dest: Destination, registry: AdapterRegistry, adapters: AdapterPool,
+         scene: ProbeScene, settings: Settings) -> list[Item]:
+    """Each material's target model and job, checked before any render; what cannot be checked
+    (out of bounds, no model to choose) is that material's failure, not the run's."""
+    items = []
+    for e in entries:
+        item = Item(e, slot_of(e.name))
+        if e.material is not None:
+            try:
+                _prepare(item, dest, registry, adapters, scene, settings)
+            except RemapError as exc:
+                item.failure = str(exc)
+        items.append(item)
+    return items
+
+
+def _prepare(item: Item, dest: Destination, registry: AdapterRegistry, adapters: AdapterPool, scene: ProbeScene,
+             settings: Settings) -> None:
+    e, src = item.entry, item.entry.material
+    fix: dict = {}
+    if dest.model is not None:
+        item.model = dest.model
+    elif src.adapter == dest.adapter:
+        item.model, item.why = src.model, "its own model (the source is already this adapter's)"
+    else:
+        look = adapters[src.adapter].appearance(src.model, registry.get(src.adapter).models[src.model].complete(
+            src.params, file=e.file, prefix=f"{e.name}: params"))
+        choice = adapters[dest.adapter].model_for(look) if look is not None else None
+        if choice is None:
+            raise ConfigError(f"adapter {dest.adapter!r} cannot choose a model for it: give --to "
+                              f"{dest.adapter}:MODEL (models: {', '.join(sorted(registry.get(dest.adapter).models))})")
+        item.model, fix, item.why = choice.model, dict(choice.fix), choice.why
+    job = Job(source=src, target=Target(adapter=dest.adapter, model=item.model, fix=fix), scene=scene,
+              settings=settings, label=f"{e.file}: {e.name}")
+    where = Where(source_file=e.file, params_prefix=f"{e.name}: params", target_file=None, target_prefix="--to ")
+    item.task = Task(item.slot, resolve(job, registry, where).job, e.name)
+
+
+def convert(entries: list[Entry], dest: Destination, out: str | Path, registry: AdapterRegistry, formats: Formats,
+            workers: Workers, adapters: AdapterPool, *, scene: ProbeScene, settings: Settings,
+            quiet: bool = False) -> Conversion:
+    from .html import write_index
+
+    t0 = time.perf_counter()
+    items = plan(entries, dest, registry, adapters, scene, settings)
+    with owned(out) as folder:
+        runnable = [i for i in items if i.task is not None]
+        runner = Runner(Store(folder / "materials"), workers, renderer_files=tuple(registry.loaded_files()),
+                        quiet=quiet, stop_on_error=False, line=_line)
+        for item, done in zip(runnable, runner.run([i.task for i in runnable])):
+            item.done = done
+        result = Conversion(items, dest, where=workers.where)
+        _write_libraries(result, folder, formats)
+        result.seconds = time.perf_counter() - t0
+        write_json_atomic(folder / "convert.json", summary(result))
+        write_index(folder / "index.html", result)
+    return result
+
+
+def _write_libraries(result: Conversion, folder: Path, formats: Formats) -> None:
+    ok = [i for i in result.items if i.done is not None and i.done.report is not None]
+    models = {i.model for i in ok}
+    for writer in formats.writers_for(result.destination.adapter, models):
+        mine = [Converted(i.entry.name, i.model, dict(i.done.report.params), folder / "materials" / i.slot)
+                for i in ok if not writer.models or i.model in writer.models]
+        if not mine:
+            continue
+        try:
+            result.libraries += writer.write(folder, mine)
+        except RemapError as exc:
+            result.library_notes.append(f"{writer.name}: not written: {exc}")
+
+
+def _line(done: Done, i: int, n: int) -> str:
+    if done.report is None:
+        return f"[{i}/{n}] {done.task.title}: FAILED: {done.error}"
+    r = done.report
+    return (f"[{i}/{n}] {done.task.title} -> {r.target.model}: {r.metrics.relative_rmse:.2%}, {r.renders} renders, "
+            f"{r.seconds:.1f} s, {r.verdict}" + (" [resumed]" if done.resumed else "")
+            + (f" (redone: {done.redone})" if done.redone else ""))
+
+
+def summary(result: Conversion) -> dict:
+    rows = []
+    for i in result.items:
+        rep = i.done.report if i.done is not None else None
+        rows.append({"name": i.entry.name, "file": i.entry.file, "status": i.status, "reason": i.reason,
+                     "slot": i.slot if rep is not None else None, "model": i.model or None, "model_why": i.why,
+                     "relative_rmse": rep.metrics.relative_rmse if rep else None,
+                     "perceptual": rep.metrics.perceptual if rep else None,
+                     "renders": rep.renders if rep else None, "seconds": rep.seconds if rep else None,
+                     "resumed": bool(i.done and i.done.resumed), "notes": i.entry.notes,
+                     "textured": i.entry.textured})
+    return {"target": result.destination.adapter, "model": result.destination.model, "materials": rows,
+            "converted": sum(r["status"] in ("ok", "mismatch", "unreliable") for r in rows),
+            "failed": sum(r["status"] in ("failed", "unsupported") for r in rows),
+            "libraries": [p.name for p in result.libraries], "library_notes": result.library_notes,
+            "seconds": result.seconds, "ran_in": result.where}

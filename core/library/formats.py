@@ -1,0 +1,173 @@
+"""Library file formats as plugins: readers turn a file into named source materials, writers turn
+converted materials into one native library file.
+
+A reader or writer is registered through the plugin host (`brdfremap_register_formats`), the
+built-ins exactly as a third party's. Readers never render; one that needs a renderer's own
+libraries to parse a file (a `.blend`) runs them in a worker process of its own."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Protocol
+
+from pydantic import Field
+
+from ..errors import ConfigError
+from ..model import Strict
+from ..schemas import Material
+
+
+class Entry(Strict):
+    """One material found in a file: convertible (``material``), or not (``problem`` says why)."""
+
+    name: str = Field(description="The material's name in its file.")
+    file: str = Field(description="The file it was read from.")
+    material: Material | None = Field(None, description="The source material; None when it cannot be converted.")
+    problem: str = Field("", description="Why it cannot be converted (an unsupported type).")
+    notes: list[str] = Field(default_factory=list, description="What the reading changed or left out: inputs with "
+                                                               "no counterpart, a correspondence used.")
+    textured: list[str] = Field(default_factory=list, description="Inputs driven by a texture or a node graph, "
+                                                                  "e.g. \"base_color <- image 'brass.png'\": "
+                                                                  "converted with their constant value.")
+
+
+class Reader(Protocol):
+    name: str
+    suffixes: tuple[str, ...]
+    """File endings it reads (".xml"); a reader may decline a file of its ending (`accepts`)."""
+
+    def accepts(self, path: Path) -> bool:
+        """Whether this file is one of its kind (cheap: a look at its first bytes)."""
+
+    def read(self, path: Path) -> list[Entry]:
+        """Every material of the file, convertible or not. A file it cannot read at all is a
+        ConfigError naming the file."""
+
+
+@dataclass(frozen=True)
+class Converted:
+    """A material converted, as a writer receives it: the source's name and the fitted target."""
+
+    name: str
+    model: str
+    params: dict[str, Any]
+    folder: Path
+    """The job's result folder (its own native files are there)."""
+
+
+class Writer(Protocol):
+    name: str
+    adapter: str
+    """The target adapter whose materials it writes."""
+    models: tuple[str, ...]
+    """The target models it writes (empty: all)."""
+
+    def write(self, folder: Path, items: list[Converted]) -> list[Path]:
+        """Write one library file (or a few) of these materials into ``folder``; return them."""
+
+
+@dataclass
+class Formats:
+    readers: list[Any] = field(default_factory=list)
+    writers: list[Any] = field(default_factory=list)
+    broken: dict[str, str] = field(default_factory=dict)
+
+    def reader_for(self, path: Path) -> Any | None:
+        """The reader of this file: the first of its ending that accepts it, else the first of
+        its ending (whose error then says what the file is)."""
+        mine = [r for r in self.readers if path.suffix.lower() in r.suffixes]
+        return next((r for r in mine if r.accepts(path)), mine[0] if mine else None)
+
+    def writers_for(self, adapter: str, models: set[str]) -> list[Any]:
+        return [w for w in self.writers if w.adapter == adapter and (not w.models or models & set(w.models))]
+
+    @property
+    def suffixes(self) -> set[str]:
+        return {s for r in self.readers for s in r.suffixes}
+
+
+def collect_formats(pm=None) -> Formats:
+    """Every registered reader and writer (the core's YAML reader first)."""
+    from ..plugins import get_plugin_manager
+    from .yaml_reader import YamlReader
+
+    pm = pm or get_plugin_manager()
+    formats = Formats(readers=[YamlReader()])
+    for impl in pm.hook.brdfremap_register_formats.get_hookimpls():
+        try:
+            impl.function(register_reader=formats.readers.append, register_writer=formats.writers.append)
+        except Exception as exc:  # a broken plugin is listed with its error, not fatal
+            formats.broken[impl.plugin_name] = f"{type(exc).__name__}: {exc}"
+    return formats
+
+
+def expand_inputs(paths: list[str], formats: Formats) -> list[Path]:
+    """The files to read: each given file, and the files of a given folder whose ending a reader
+    knows (sorted). A missing path is a ConfigError naming it."""
+    out: list[Path] = []
+    for text in paths:
+        p = Path(text)
+        if not p.exists():
+            raise ConfigError("not found (check the path)", file=text)
+        if p.is_dir():
+            found = sorted(f for f in p.iterdir() if f.is_file() and f.suffix.lower() in formats.suffixes
+                           and formats.reader_for(f).accepts(f))
+            if not found:
+                raise ConfigError(f"holds no file this tool reads ({', '.join(sorted(formats.suffixes))})", file=text)
+            out += found
+        else:
+            out.append(p)
+    return list(dict.fromkeys(out))
+
+
+def read_all(paths: list[Path], formats: Formats) -> list[Entry]:
+    """Every material of every file, names made unique (a second 'gold' becomes 'file/gold')."""
+    entries: list[Entry] = []
+    for p in paths:
+        reader = formats.reader_for(p)
+        if reader is None:
+            raise ConfigError(f"no reader for this kind of file (known endings: {', '.join(sorted(formats.suffixes))})",
+                              file=str(p))
+        entries += reader.read(p)
+    return _unique(entries)
+
+
+def _unique(entries: list[Entry]) -> list[Entry]:
+    counts: dict[str, int] = {}
+    for e in entries:
+        counts[e.name] = counts.get(e.name, 0) + 1
+    out, taken = [], set()
+    for e in entries:
+        name = e.name if counts[e.name] == 1 else f"{Path(e.file).stem}/{e.name}"
+        n, candidate = 1, name
+        while candidate in taken:
+            n += 1
+            candidate = f"{name} ({n})"
+        taken.add(candidate)
+        out.append(e if candidate == e.name else e.model_copy(update={"name": candidate}))
+    return out
+
+
+def clip_into(spec, params: dict) -> list[str]:
+    """Move a read value the model's bounds do not reach to the bound, in place, and say so; a
+    choice the model does not have is a ConfigError (the material cannot be converted)."""
+    notes = []
+    for name, v in list(params.items()):
+        p = spec.param(name)
+        if p.kind == "choice":
+            if v not in p.choices:
+                shown = ", ".join(p.choices[:8]) + (" …" if len(p.choices) > 8 else "")
+                raise ConfigError(f"{name} {v!r} is not one of the {spec.name!r} model's choices ({shown})")
+            continue
+        given = tuple(v) if isinstance(v, (list, tuple)) else v
+        clipped = p.clip(given)
+        if clipped != given:
+            notes.append(f"{name} {_shown(given)} is outside the {spec.name!r} model's bounds [{p.lower:g}, "
+                         f"{p.upper:g}]: read as {_shown(clipped)}")
+        params[name] = clipped
+    return notes
+
+
+def _shown(v) -> str:
+    return "(" + ", ".join(f"{x:.4g}" for x in v) + ")" if isinstance(v, tuple) else f"{v:.4g}"

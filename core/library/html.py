@@ -1,0 +1,58 @@
+"""The library report, `index.html`: one self-contained page (its images beside it, nothing
+fetched), worst first, rendered from a jinja2 template with autoescaping."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from ..atomic import write_text_atomic
+from ..schemas import format_value
+
+if TYPE_CHECKING:
+    from .convert import Conversion, Item
+
+RANK = {"failed": 0, "unsupported": 1, "unreliable": 2, "mismatch": 3, "ok": 4, "pending": 5}
+
+
+def _order(item: "Item") -> tuple:
+    rep = item.done.report if item.done is not None else None
+    return (RANK[item.status], -(rep.metrics.relative_rmse if rep else 0.0), item.entry.name.lower())
+
+
+def _card(item: "Item") -> dict:
+    rep = item.done.report if item.done is not None else None
+    src = item.entry.material
+    card = {"name": item.entry.name, "file": item.entry.file, "status": item.status, "reason": item.reason,
+            "model": item.model, "why": item.why, "notes": item.entry.notes, "textured": item.entry.textured,
+            "source": f"{src.adapter}:{src.model}" if src else "", "report": None}
+    if rep is not None:
+        folder = f"materials/{item.slot}"
+        m = rep.metrics
+        card["report"] = {
+            "folder": folder, "images": [f"{folder}/{n}.png" for n in ("source", "target", "error")],
+            "before": {k: format_value(_tuple(v)) for k, v in rep.source.params.items()},
+            "after": {k: format_value(_tuple(v)) for k, v in rep.params.items()},
+            "fitted": rep.fitted, "error": m.relative_rmse, "perceptual": m.perceptual, "noise": m.noise_floor,
+            "threshold": m.threshold, "renders": rep.renders, "seconds": rep.seconds, "resumed": item.done.resumed,
+            "findings": [{"severity": f.severity, "message": f.message} for f in rep.findings],
+            "target": f"{rep.target.adapter}:{rep.target.model}"}
+    return card
+
+
+def _tuple(v):
+    return tuple(v) if isinstance(v, list) else v
+
+
+def write_index(path: Path, result: "Conversion") -> Path:
+    import jinja2
+
+    env = jinja2.Environment(loader=jinja2.FileSystemLoader(Path(__file__).with_name("templates")),
+                             autoescape=True, undefined=jinja2.StrictUndefined)
+    items = sorted(result.items, key=_order)
+    counts = {s: sum(i.status == s for i in items) for s in RANK if s != "pending"}
+    html = env.get_template("index.html.j2").render(
+        cards=[_card(i) for i in items], counts=counts, total=len(items), destination=result.destination,
+        libraries=[p.name for p in result.libraries], library_notes=result.library_notes,
+        seconds=result.seconds, where=result.where)
+    return write_text_atomic(path, html)
