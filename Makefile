@@ -1,8 +1,10 @@
 # Two commands do all the set-up on a fresh Debian machine:
-#   make demo   - the main job: Mitsuba gold remapped to Blender Cycles' Principled BSDF (out/gold)
+#   make demo   - the main job: an example Mitsuba scene of eight materials converted to Blender
+#                 Cycles (out/library: library.blend, index.html)
 #   make test   - the test suite
 # Both create .venv and install what they need; `system-deps` adds libLLVM 19 so Mitsuba
-# can use its fast llvm_ad_rgb variant (without it the tool falls back to scalar_rgb).
+# can use its fast llvm_ad_rgb variant (without it the tool falls back to scalar_rgb), and
+# Debian's Chromium, in which the tests open the HTML report.
 
 PYTHON ?= python3.11
 VENV   ?= .venv
@@ -19,16 +21,17 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e '.[all]'
 	@touch $(STAMP)
 
+APT_NEEDS := $(if $(wildcard $(LLVM19)),,libllvm19) $(if $(wildcard /usr/bin/chromium),,chromium)
+
 system-deps:
-	@if [ "$$(uname -s)" = Linux ] && [ ! -e $(LLVM19) ] && command -v apt-get >/dev/null; then \
+	@if [ "$$(uname -s)" = Linux ] && [ -n "$(strip $(APT_NEEDS))" ] && command -v apt-get >/dev/null; then \
 	  if [ "$$(id -u)" = 0 ]; then SUDO=; else SUDO=sudo; fi; \
-	  echo "installing libllvm19 (Mitsuba's llvm variant)"; \
-	  $$SUDO apt-get update -qq && $$SUDO apt-get install -y -qq libllvm19 >/dev/null; \
+	  echo "installing $(strip $(APT_NEEDS)) (Mitsuba's llvm variant; the browser the report is tested in)"; \
+	  $$SUDO apt-get update -qq && $$SUDO apt-get install -y -qq $(APT_NEEDS) >/dev/null; \
 	fi
 
 demo: system-deps $(STAMP)
-	$(VENV)/bin/remap --adapter cycles --model principled \
-	    --source configs/materials/gold.yaml --out out/gold
+	$(VENV)/bin/remap convert examples/library/scene.xml --to cycles --out out/library
 
 test: system-deps $(STAMP)
 	$(PY) -m pytest

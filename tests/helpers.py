@@ -78,3 +78,45 @@ def fill(folder, leave: int) -> None:
     free = st.f_bavail * st.f_frsize
     with open(os.path.join(folder, "filler"), "wb") as f:
         f.write(b"\0" * max(free - leave, 0))
+
+
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+def open_in_chromium(page_path, screenshot=None, click=None) -> dict:
+    """Load a page in Debian's headless Chromium (driven by playwright): its console errors, its
+    images and the broken ones, and a screenshot when asked. Skips (fails in CI) without Chromium."""
+    import os
+    import shutil
+
+    import pytest
+
+    exe = shutil.which("chromium") or "/usr/bin/chromium"
+    if not os.path.exists(exe):
+        if os.environ.get("CI"):
+            pytest.fail("Chromium must be installed in CI (make system-deps installs Debian's chromium)")
+        pytest.skip("Chromium is not installed (apt-get install chromium)")
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=exe, args=CHROMIUM_ARGS)
+        try:
+            page = browser.new_page(viewport={"width": 1200, "height": 1500})
+            errors: list[str] = []
+            page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.on("requestfailed", lambda r: errors.append(f"request failed: {r.url}"))
+            page.goto(f"file://{os.path.abspath(page_path)}")
+            page.wait_for_load_state("load")
+            images = page.evaluate("document.images.length")
+            broken = page.evaluate("Array.from(document.images).filter(i => !i.complete || i.naturalWidth === 0)"
+                                   ".map(i => i.getAttribute('src'))")
+            if click:
+                page.click(click)
+            rows = page.evaluate("Array.from(document.querySelectorAll('#summary tbody tr')).map(r => r.dataset.name)")
+            if screenshot:
+                page.screenshot(path=str(screenshot))
+        finally:
+            browser.close()
+    return {"errors": errors, "images": images, "broken": broken, "rows": rows}

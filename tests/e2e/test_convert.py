@@ -1,0 +1,165 @@
+"""`remap convert` end to end: real files in, real renders, native libraries out that the target
+renderer loads, and the report opened in a real headless Chromium."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from brdfremap.core.cli import main
+from helpers import ROOT, one_line_error, open_in_chromium, remap
+from reports import read_result
+
+DATA = ROOT / "tests" / "data"
+FAST = ["--resolution", "32", "--spp", "8", "--quiet"]
+
+
+def _summary(out: Path) -> dict:
+    return json.loads((out / "convert.json").read_text())
+
+
+def test_a_mitsuba_scene_of_mixed_bsdfs_converts_to_one_blend_and_a_report(tmp_path, mitsuba_adapter,
+                                                                            cycles_adapter, capsys):
+    from brdfremap.adapters.cycles.library import BlendReader
+
+    out = tmp_path / "lib"
+    code = main(["convert", str(DATA / "scenes" / "mixed.xml"), "--to", "cycles", "--out", str(out), *FAST])
+    s = _summary(out)
+    assert code == 1  # three of the eleven cannot be converted: said, and the others go on
+    assert s["converted"] == 8 and s["failed"] == 3
+    status = {m["name"]: (m["status"], m["reason"]) for m in s["materials"]}
+    assert {n for n, (st, _) in status.items() if st == "unsupported"} == {"glass", "mix"}
+    # A near-mirror (alpha 0.002) shows no highlight at 32 px: the probe sees nothing to match.
+    assert status["smooth silver"][0] == "failed" and "image is black" in status["smooth silver"][1]
+    assert {m["name"]: m["model"] for m in s["materials"]}["gold"] == "glossy"  # a metal: the Glossy BSDF
+    # The .blend holds every converted material under its source's name.
+    converted = {m["name"] for m in s["materials"] if m["slot"]}
+    in_blend = {e.name: e for e in BlendReader().read(out / "library.blend")}
+    assert set(in_blend) == converted
+    gold = next(m for m in s["materials"] if m["name"] == "gold")
+    fitted = read_result(out / "materials" / gold["slot"] / "result.json")["params"]
+    assert in_blend["gold"].material.params["roughness"] == pytest.approx(fitted["roughness"], rel=1e-5)
+    for m in s["materials"]:
+        if m["slot"]:
+            read_result(out / "materials" / m["slot"] / "result.json")
+    page = open_in_chromium(out / "index.html")
+    assert page["errors"] == [] and page["broken"] == [] and page["images"] == 3 * 8
+    assert set(page["rows"][:3]) == {"glass", "mix", "smooth silver"}  # the failed first
+    printed = capsys.readouterr().out
+    assert "unsupported: glass" in printed and f"report      {out}/index.html" in printed
+
+
+BLEND_SCRIPT = """
+import sys, bpy
+bpy.ops.wm.read_factory_settings(use_empty=True)
+for i in range(10):
+    m = bpy.data.materials.new(f"principled {i:02d}")
+    m.use_nodes = True
+    b = m.node_tree.nodes["Principled BSDF"]
+    b.inputs["Base Color"].default_value = (0.1 + 0.08 * i, 0.5, 0.9 - 0.08 * i, 1.0)
+    b.inputs["Metallic"].default_value = 1.0 if i % 3 == 0 else 0.0
+    b.inputs["Roughness"].default_value = 0.2 + 0.05 * i
+    m.use_fake_user = True
+bpy.ops.wm.save_as_mainfile(filepath=sys.argv[-1])
+"""
+
+
+def test_a_blend_of_ten_principled_materials_converts_to_mitsuba_xml_that_mitsuba_loads(tmp_path, mitsuba_adapter,
+                                                                                       cycles_adapter):
+    blend = tmp_path / "made.blend"
+    made = subprocess.run([sys.executable, "-c", BLEND_SCRIPT, str(blend)], capture_output=True, text=True)
+    assert made.returncode == 0 and blend.exists(), made.stderr[-2000:]
+    out = tmp_path / "lib"
+    assert main(["convert", str(blend), "--to", "mitsuba", "--out", str(out), *FAST]) == 0
+    s = _summary(out)
+    assert s["converted"] == 10
+    models = {m["name"]: m["model"] for m in s["materials"]}
+    assert models["principled 00"] == "roughconductor" and models["principled 01"] == "roughplastic"
+    mi = mitsuba_adapter.mi
+    (tmp_path / "use.xml").write_text(
+        "<scene version='3.0.0'><include filename='lib/library.xml'/>"
+        + "".join(f"<shape type='sphere'><ref id='principled {i:02d}'/></shape>" for i in range(10)) + "</scene>")
+    scene = mi.load_file(str(tmp_path / "use.xml"))
+    assert sorted(sh.bsdf().id() for sh in scene.shapes()) == [f"principled {i:02d}" for i in range(10)]
+    assert open_in_chromium(out / "index.html")["errors"] == []
+
+
+ONE_PER_SHADER = ["--only", "gold", "--only", "copper", "--only", "green_plastic", "--only", "clay"]
+
+
+@pytest.mark.parametrize("to, models", [("mitsuba", {"roughconductor", "roughplastic"}),
+                                        ("mitsuba:roughplastic", {"roughplastic"})])
+def test_materialx_of_each_shader_type_converts_to_mitsuba(tmp_path, mitsuba_adapter, cycles_adapter, to, models):
+    out = tmp_path / "lib"
+    assert main(["convert", str(DATA / "materialx"), "--to", to, "--out", str(out), *ONE_PER_SHADER, *FAST]) == 0
+    s = _summary(out)
+    assert s["converted"] == 4 and {m["model"] for m in s["materials"]} == models
+    assert {Path(m["file"]).name for m in s["materials"]} == {"open_pbr.mtlx", "standard_surface.mtlx",
+                                                            "gltf_pbr.mtlx", "usd_preview.mtlx"}
+    mitsuba_adapter.mi.load_file(str(out / "library.xml"))
+
+
+def test_a_library_converted_to_principled_is_also_valid_materialx(tmp_path, cycles_adapter):
+    import MaterialX as mx
+
+    from brdfremap.adapters.materialx.reader import standard_libraries
+
+    out = tmp_path / "lib"
+    assert main(["convert", str(DATA / "materialx"), "--to", "cycles:principled", "--out", str(out), *FAST,
+                 "--only", "red_plastic", "--only", "chrome"]) == 0
+    doc = mx.createDocument()
+    mx.readFromXmlFile(doc, str(out / "library.mtlx"))
+    assert sorted(m.getName() for m in doc.getMaterialNodes()) == ["chrome", "red_plastic"]
+    doc.importLibrary(standard_libraries())
+    assert doc.validate()[0]
+
+
+def _table(out: Path) -> list:
+    return [{k: v for k, v in m.items() if k not in ("seconds", "resumed")} for m in _summary(out)["materials"]]
+
+
+def test_killed_and_rerun_every_material_once_and_dask_gives_the_same(tmp_path, mitsuba_adapter):
+    """kill -9 halfway and rerun: the stored materials are reused, the others run once; a Dask
+    LocalCluster of two worker processes gives the same results."""
+    from distributed import LocalCluster
+
+    src = ROOT / "examples" / "library" / "scene.xml"
+    out = tmp_path / "lib"
+    cmd = [sys.executable, "-m", "brdfremap.core.cli", "convert", str(src), "--to", "mitsuba", "--out", str(out),
+           "--resolution", "64"]
+    proc = subprocess.Popen([*cmd, "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 120
+    while len(list((out / "materials").glob("*/result.json")) if (out / "materials").exists() else []) < 3:
+        assert proc.poll() is None and time.time() < deadline, proc.communicate()
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGKILL)
+    proc.communicate()
+    stored = len(list((out / "materials").glob("*/result.json")))
+    rerun = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert rerun.returncode == 0, rerun.stderr
+    lines = [line for line in rerun.stderr.splitlines() if line.startswith("[")]
+    assert sum("[resumed]" in line for line in lines) == stored and len(lines) == 8
+    assert not [p for p in (out / "materials").rglob(".staging-*")]
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        assert main(["convert", str(src), "--to", "mitsuba", "--out", str(tmp_path / "dask"), "--resolution", "64",
+                     "--quiet", "--scheduler", cluster.scheduler_address]) == 0
+    assert _table(tmp_path / "dask") == _table(out)
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--to", "arnold"], "--to: unknown adapter 'arnold'"),
+    (["--to", "cycles:glass"], "--to: adapter 'cycles' has no model 'glass'"),
+    (["--to", "mitsuba", "--only", "nonesuch"], "--only: no material named 'nonesuch'"),
+])
+def test_bad_input_is_exit_2_and_one_line(tmp_path, args, words):
+    proc = remap("convert", ROOT / "examples" / "library" / "scene.xml", "--out", tmp_path / "o", *args)
+    one_line_error(proc, words)
+    (tmp_path / "broken.xml").write_text("<scene version='3.0.0'><bsdf></scene>")
+    one_line_error(remap("convert", tmp_path / "broken.xml", "--to", "mitsuba", "--out", tmp_path / "o"),
+                   "broken.xml: line 1", "malformed XML")
+    assert not (tmp_path / "o").exists()

@@ -1,0 +1,103 @@
+"""Library readers without a render: Mitsuba XML (no Mitsuba needed), MaterialX (the materialx
+package), the project's YAML; their errors name the file."""
+
+from pathlib import Path
+
+import pytest
+
+from brdfremap.core.errors import ConfigError
+from brdfremap.core.library.formats import collect_formats, expand_inputs, read_all
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+
+
+@pytest.fixture(scope="module")
+def formats():
+    return collect_formats()
+
+
+def _read(formats, *paths):
+    return {e.name: e for e in read_all(expand_inputs([str(p) for p in paths], formats), formats)}
+
+
+def test_every_bsdf_of_a_mitsuba_scene_is_read_as_mitsuba_reads_it(formats):
+    got = _read(formats, DATA / "scenes" / "mixed.xml")
+    assert len(got) == 11  # ten at the top level, and an anonymous one inside a shape named after it
+    assert got["gold"].material.params == {"material": "Au", "alpha": 0.15}  # <default> and $rough
+    assert got["tinted mirror"].material.params["specular_reflectance"] == (0.8, 0.7, 0.6)
+    # Mitsuba's default conductor (no preset, no eta/k) is a perfect mirror: eta 0, k 1.
+    assert got["tinted mirror"].material.params["eta"] == (0.0, 0.0, 0.0)
+    assert got["green plastic"].material.params["int_ior"] == 1.49  # "acrylic glass"
+    assert "twosided" in got["green plastic"].notes[0]
+    assert got["glossy white"].material.params["alpha"] == 0.002 and "smooth plastic" in got["glossy white"].notes[0]
+    assert got["glossy white"].material.params["diffuse_reflectance"] == (0.7, 0.7, 0.7)  # a uniform spectrum
+    assert got["wood"].textured == ["reflectance <- bitmap 'textures/wood.png'"]
+    assert "isotropic alpha 0.1225" in got["brushed steel"].notes[0]
+    assert got["rubber ball"].material.model == "roughplastic"
+    assert "glass" in got["glass"].problem and got["glass"].material is None
+    assert "blendbsdf" in got["mix"].problem
+
+
+@pytest.mark.parametrize("text, words", [
+    ("<scene version='3.0.0'><bsdf type='diffuse' id='a'></scene>", "line 1, column"),
+    ("<scene version='3.0.0'><bsdf type='roughconductor' id='a'><float name='alpha' value='$r'/></bsdf></scene>",
+     "$r is used but no <default name='r'>"),
+    ("<scene version='3.0.0'><shape type='sphere'><ref id='nope'/></shape>"
+     "<bsdf type='twosided' id='t'><ref id='nope'/></bsdf></scene>", "<ref id='nope'> names nothing"),
+    ("<scene version='3.0.0'><include filename='missing.xml'/></scene>", "missing.xml: cannot read"),
+])
+def test_a_broken_scene_is_one_error_naming_the_file(tmp_path, formats, text, words):
+    path = tmp_path / "s.xml"
+    path.write_text(text)
+    with pytest.raises(ConfigError, match=words.replace("$", r"\$").replace("(", r"\(")):
+        _read(formats, path)
+
+
+def test_includes_are_read_and_entities_are_not_expanded(tmp_path, formats):
+    (tmp_path / "lib.xml").write_text("<scene version='3.0.0'><bsdf type='diffuse' id='inc'/></scene>")
+    (tmp_path / "main.xml").write_text("<scene version='3.0.0'><include filename='lib.xml'/>"
+                                       "<bsdf type='diffuse' id='own'/></scene>")
+    assert set(_read(formats, tmp_path / "main.xml")) == {"inc", "own"}
+    (tmp_path / "evil.xml").write_text('<?xml version="1.0"?><!DOCTYPE s [<!ENTITY x SYSTEM "file:///etc/passwd">]>'
+                                       "<scene version='3.0.0'><bsdf type='diffuse' id='&x;'/></scene>")
+    with pytest.raises(ConfigError):  # an external entity is not resolved: the parser refuses it
+        _read(formats, tmp_path / "evil.xml")
+
+
+def test_materialx_documents_of_each_shader_are_read_as_principled(formats):
+    got = _read(formats, DATA / "materialx")
+    assert len(got) == 9 and {e.material.model for e in got.values()} == {"principled"}
+    assert all(e.material.adapter == "cycles" and "correspondence" in e.notes[0] for e in got.values())
+    copper = got["copper"].material.params  # a MaterialX 1.38 document, upgraded on reading
+    assert copper["metallic"] == 1.0 and copper["base_color"] == (0.955, 0.638, 0.538)
+    blue = got["blue_plastic"].material.params
+    assert blue["base_color"] == pytest.approx((0.045, 0.135, 0.54))  # base (0.9) times base_color
+    assert any("sheen = 0.3" in n for n in got["blue_plastic"].notes)
+    assert got["wood"].textured == ["base_color <- image 'wood.png'"]
+    assert any("specular_roughness_anisotropy" in n for n in got["gold"].notes)
+    assert got["chrome"].material.params["metallic"] == 1.0 and got["clay"].material.params["roughness"] == 0.8
+
+
+def test_an_invalid_materialx_document_is_one_error(tmp_path, formats):
+    bad = tmp_path / "bad.mtlx"
+    bad.write_text('<?xml version="1.0"?><materialx version="1.39"><open_pbr_surface name="s" '
+                   'type="surfaceshader"><input name="base_color" type="color3" value="oops" /></open_pbr_surface>'
+                   '</materialx>')
+    with pytest.raises(ConfigError, match="bad.mtlx"):
+        _read(formats, bad)
+    bad.write_text("not xml at all")
+    with pytest.raises(ConfigError, match="bad.mtlx: cannot read it as MaterialX"):
+        _read(formats, bad)
+
+
+def test_a_folder_reads_the_materials_it_holds_and_names_stay_unique(tmp_path, formats, root):
+    (tmp_path / "gold.yaml").write_text((root / "configs/materials/gold.yaml").read_text())
+    (tmp_path / "exp.yaml").write_text("kind: sweep\nname: not a material\n")  # skipped in a folder
+    (tmp_path / "notes.txt").write_text("ignored")
+    (tmp_path / "lib.xml").write_text("<scene version='3.0.0'><bsdf type='diffuse' id='gold'/></scene>")
+    got = _read(formats, tmp_path)
+    assert set(got) == {"lib/gold", "gold/gold"}  # two golds: each named after its file
+    with pytest.raises(ConfigError, match="not found"):
+        expand_inputs([str(tmp_path / "nope.xml")], formats)
+    with pytest.raises(ConfigError, match="no reader for this kind of file"):
+        read_all([tmp_path / "notes.txt"], formats)
