@@ -30,18 +30,34 @@ _DOTTED = re.compile(r"^[a-z_][a-z0-9_]*(\.[a-z_][a-z0-9_]*)*$")
 
 
 class _Loader(yaml.SafeLoader):
+    def compose_node(self, parent, index):
+        # Aliases (and the merge keys built on them) are refused: a few hundred bytes of nested
+        # aliases expand to gigabytes ("billion laughs"), and no file of this tool needs them.
+        if self.check_event(yaml.events.AliasEvent):
+            event = self.peek_event()
+            raise yaml.composer.ComposerError(None, None, "aliases (*name) and merge keys (<<) are not supported: "
+                                              "write the values out", event.start_mark)
+        return super().compose_node(parent, index)
+
     def construct_mapping(self, node, deep=False):
         seen: dict[Any, int] = {}
         for key_node, _ in node.value:
             key = self.construct_object(key_node, deep=True)
+            line = key_node.start_mark.line + 1
             try:
-                first = seen.setdefault(key, key_node.start_mark.line + 1)
+                if key in seen:
+                    raise yaml.constructor.ConstructorError(
+                        None, None, f"{_short(key)} is given twice (first on line {seen[key]}): keep one",
+                        key_node.start_mark)
+                seen[key] = line
             except TypeError:
                 continue  # an unhashable key: the safe constructor reports it
-            if first != key_node.start_mark.line + 1:
-                raise yaml.constructor.ConstructorError(
-                    None, None, f"{key!r} is given twice (first on line {first}): keep one", key_node.start_mark)
         return super().construct_mapping(node, deep)
+
+
+def _short(value: Any, n: int = 80) -> str:
+    text = repr(value)
+    return text if len(text) <= n else text[:n] + "…"
 
 
 # Floats as YAML 1.2 reads them (PyYAML's 1.1 rule wants a dot: 1e-3 would be a string).
@@ -63,6 +79,8 @@ def read_yaml(path: str | Path) -> Any:
         raise ConfigError(f"cannot read: {exc.strerror or exc}", file=str(path)) from None
     try:
         return yaml.load(text, Loader=_Loader)  # noqa: S506 - a SafeLoader subclass
+    except RecursionError:
+        raise ConfigError("malformed YAML: nested too deeply", file=str(path)) from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}" if mark else None
@@ -88,7 +106,8 @@ def validation_message(exc: ValidationError) -> tuple[str, str]:
     return field or "(top level)", msg
 
 
-_ROLES = {"a material": {"adapter", "model"}, "an experiment": {"kind", "sweep"},
+_ROLES = {"a result (result.json)": {"schema_version", "key"}, "a material": {"adapter", "model"},
+          "an experiment": {"kind", "sweep"},
           "a renderer definition": {"name", "command"}, "a scene": {"sphere", "camera"}}
 
 

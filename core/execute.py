@@ -19,7 +19,9 @@ from typing import Any, Iterator
 
 import numpy as np
 
+from .atomic import why
 from .engine import ProgressFn, remap
+from .errors import RemapError, RenderError
 from .imageio import write_exr, write_previews
 from .job import Job, Resolved, resolve
 from .plugins import AdapterRegistry, collect_adapters
@@ -121,15 +123,21 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
 
 def artifacts(adapter: Adapter, model: str, params: dict[str, Value], source: np.ndarray,
               target: np.ndarray) -> dict[str, bytes]:
-    """The result's files, by name: linear EXRs, PNG previews, the material in the target's own form."""
-    with tempfile.TemporaryDirectory(prefix="brdfremap-") as tmp:
-        d = Path(tmp)
-        write_exr(d / "source.exr", source)
-        write_exr(d / "target.exr", target)
-        write_previews(d, source, target)
-        paths = [d / n for n in ("source.exr", "target.exr", "source.png", "target.png", "error.png")]
-        paths += [Path(p) for p in adapter.write_native(model, params, d)]
-        return {p.name: p.read_bytes() for p in paths}
+    """The result's files, by name: linear EXRs, PNG previews, the material in the target's own form
+    (made in a temporary folder, where this process runs, and handed over as bytes)."""
+    try:
+        with tempfile.TemporaryDirectory(prefix="brdfremap-") as tmp:
+            d = Path(tmp)
+            write_exr(d / "source.exr", source)
+            write_exr(d / "target.exr", target)
+            write_previews(d, source, target)
+            paths = [d / n for n in ("source.exr", "target.exr", "source.png", "target.png", "error.png")]
+            paths += [Path(p) for p in adapter.write_native(model, params, d)]
+            return {p.name: p.read_bytes() for p in paths}
+    except (OSError, RemapError) as exc:
+        reason = why(exc) if isinstance(exc, OSError) else str(exc).split(": ", 1)[-1]
+        raise RenderError(f"cannot make the result's files in the temporary folder {tempfile.gettempdir()}: "
+                          f"{reason} (set TMPDIR to a folder with space)") from None
 
 
 def informed_start(resolved: Resolved, adapters: AdapterPool) -> dict[str, Value]:

@@ -50,6 +50,9 @@ def workers(jobs: int = 1, scheduler: str | None = None) -> Iterator[Workers]:
     if not 1 <= jobs <= MAX_JOBS:
         raise ConfigError(f"must be from 1 to {MAX_JOBS} (each job is a process with its own renderers)",
                           field="--jobs")
+    if scheduler is not None and not scheduler.strip():
+        raise ConfigError("is empty: give the scheduler's address (tcp://HOST:8786), or leave the flag out",
+                          field="--scheduler")
     if scheduler and jobs > 1:
         raise ConfigError("give --jobs or --scheduler, not both (a cluster's size is its workers')", field="--jobs")
     if scheduler:

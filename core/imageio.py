@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .atomic import temp_beside
+from .atomic import temp_beside, why
 from .errors import RemapError
 
 
@@ -19,20 +19,36 @@ def _write(path: Path, pixels: np.ndarray, fmt: str) -> None:
 
     path = Path(path)
     tmp = temp_beside(path)
-    h, w, c = pixels.shape
-    spec = oiio.ImageSpec(w, h, c, fmt)
-    if path.suffix == ".exr":
-        spec.attribute("compression", "zip")
-    out = oiio.ImageOutput.create(str(tmp))
-    if out is None or not out.open(str(tmp), spec):
+    try:
+        h, w, c = pixels.shape
+        spec = oiio.ImageSpec(w, h, c, fmt)
+        if path.suffix == ".exr":
+            spec.attribute("compression", "zip")
+        out = oiio.ImageOutput.create(str(tmp))
+        if out is None or not out.open(str(tmp), spec):
+            raise RemapError(f"cannot write {path}: {_reason(tmp)}")
+        ok = out.write_image(pixels)
+        ok = out.close() and ok  # a full disk shows at close, when the file is flushed
+        if not ok or tmp.stat().st_size == 0:
+            raise RemapError(f"cannot write {path}: {_reason(tmp)} (the previous file, if any, is kept)")
+        os.replace(tmp, path)
+    except OSError as exc:
+        raise RemapError(f"cannot write {path}: {why(exc)} (the previous file, if any, is kept)") from None
+    finally:
         tmp.unlink(missing_ok=True)
-        raise RemapError(f"cannot write {path}: {oiio.geterror()}")
-    ok = out.write_image(pixels)
-    out.close()
-    if not ok:
-        tmp.unlink(missing_ok=True)
-        raise RemapError(f"cannot write {path}: {oiio.geterror()}")
-    os.replace(tmp, path)
+
+
+def _reason(tmp: Path) -> str:
+    import shutil
+
+    import OpenImageIO as oiio
+
+    said = oiio.geterror().strip()
+    try:
+        full = shutil.disk_usage(tmp.parent).free < 1 << 20
+    except OSError:
+        full = False
+    return "no space left on the device" if full and not said else (said or "the image library gave no reason")
 
 
 def write_exr(path: Path, image: np.ndarray) -> None:

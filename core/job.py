@@ -131,12 +131,15 @@ def resolve(job: Job, registry: AdapterRegistry, where: Where = Where()) -> Reso
 
 def _check_fixed(spec: ModelSpec, base: dict[str, Value], fixed: dict[str, Value], where: Where) -> None:
     """A value held for a parameter the model's choices switch off would silently do nothing."""
+    sep = " " if where.fix_prefix.startswith("--") else "."
     for name in fixed:
+        if spec.is_inert(name, base):
+            cond = ", ".join(f"{k}={base[k]:g}" for k in spec.param(name).inert_when)
+            raise ConfigError(f"does nothing with {cond}", file=where.target_file, field=f"{where.fix_prefix}{sep}{name}")
         if spec.is_active(name, base):
             continue
         cond = " and ".join(f"{k} is {' or '.join(v)}" for k, v in spec.param(name).active_when.items())
         now = ", ".join(f"{k}={base[k]}" for k in spec.param(name).active_when)
-        sep = " " if where.fix_prefix.startswith("--") else "."
         raise ConfigError(f"does nothing with {now}: it is used only when {cond}", file=where.target_file,
                           field=f"{where.fix_prefix}{sep}{name}")
 

@@ -157,7 +157,7 @@ def collect_adapters(pm: PluginManager | None = None) -> AdapterRegistry:
             if not isinstance(name, str) or not name:
                 raise ConfigError(f"plugin {_label} registered an adapter with an invalid name {name!r}")
             if name in registry.entries or name in registry.conflicts:
-                _conflict(registry, name, _label)
+                _conflict(registry, AdapterEntry(name, factory, _label))
                 return
             registry.entries[name] = AdapterEntry(name, factory, _label)
 
@@ -170,9 +170,23 @@ def collect_adapters(pm: PluginManager | None = None) -> AdapterRegistry:
     return registry
 
 
-def _conflict(registry: AdapterRegistry, name: str, label: str) -> None:
-    """A name registered twice is used by neither: which one was meant cannot be known. The
-    other adapters keep working, and choosing this one says who registered it."""
+def _definition(entry: AdapterEntry | None) -> Any:
+    """The definition file of a renderer defined by one (a YAML file in a renderer folder)."""
+    return getattr(entry.factory, "source_file", None) if entry is not None else None
+
+
+def _conflict(registry: AdapterRegistry, new: AdapterEntry) -> None:
+    """A name registered twice. An installed adapter keeps its name over a renderer definition
+    that takes it (the definition is listed as broken, naming its file); two of a kind are both
+    unused, since which one was meant cannot be known, and choosing the name says who."""
+    name, label = new.name, new.plugin
+    old = registry.entries.get(name)
+    if old is not None and (_definition(old) is None) != (_definition(new) is None):
+        kept, dropped = (new, old) if _definition(old) else (old, new)
+        registry.entries[name] = kept
+        registry.broken[f"renderer definition {_definition(dropped)}"] = (
+            f"its name {name!r} is an installed adapter's ({kept.plugin}): rename it (its `name:`)")
+        return
     first = registry.entries.pop(name, None)
     who = f"{first.plugin} and by {label}" if first is not None else f"{label} as well"
     if first is None and name in registry.conflicts:

@@ -4,6 +4,7 @@ and says clearly when it was written by another version of the format."""
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import platform
@@ -72,7 +73,7 @@ class FileRecord(_Strict):
 class Report(WithDerived):
     """`result.json`: what one job produced and what it is worth."""
 
-    derived_fields = ("reliable", "reason", "notes")
+    derived_fields = ("reliable", "reason", "notes", "digest")
 
     schema_version: int = Field(description="Version of this format (see `SCHEMA_VERSION`).")
     tool: str = Field(description="The program and version that wrote it.")
@@ -119,6 +120,14 @@ class Report(WithDerived):
     @property
     def notes(self) -> list[str]:
         return self.as_verdict().notes
+
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def digest(self) -> str:
+        """SHA-256 of the rest of the document: a report edited after it was written is not
+        taken for the job's result."""
+        doc = self.model_dump(mode="json", exclude={"digest"})
+        return hashlib.sha256(json.dumps(doc, sort_keys=True, ensure_ascii=False).encode()).hexdigest()
 
     def as_verdict(self) -> Verdict:
         return Verdict(status=self.verdict, findings=self.findings)
@@ -179,10 +188,14 @@ def parse_report(doc: Any, file: str) -> Report:
         raise ConfigError(f"written by an older brdf-remap (report schema {version}; this one reads "
                           f"{SCHEMA_VERSION}): run the job again to replace it", file=file)
     try:
-        return Report.model_validate(doc)
+        report = Report.model_validate(doc)
     except ValidationError as exc:
         field, msg = validation_message(exc)
         raise ConfigError(msg, file=file, field=field) from exc
+    if doc.get("digest") != report.digest:
+        raise ConfigError("was edited after it was written (its digest does not match its content): it is not "
+                          "taken for the job's result", file=file)
+    return report
 
 
 def read_report(path: str | Path) -> Report:

@@ -5,9 +5,14 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import ConfigDict, Field, field_validator, model_validator
 
-from .model import Strict as _Strict
+from .model import Strict
+
+
+class _Strict(Strict):
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)  # a scene's numbers are finite
+
 
 MAX_SPP = 65536
 MAX_SEED = 2**31 - 2
@@ -19,6 +24,10 @@ class Sphere(_Strict):
     radius: float = Field(2.0, gt=0, description="Radius of the probe sphere (scene units).")
 
 
+def _dot(a, b) -> float:
+    return sum(x * y for x, y in zip(a, b))
+
+
 class Camera(_Strict):
     """A pinhole camera looking at ``target`` from ``distance`` along +z (the view axis)."""
 
@@ -26,6 +35,13 @@ class Camera(_Strict):
     target: tuple[float, float, float] = Field((0.0, 0.0, 0.0), description="Point the camera looks at.")
     fov: float = Field(40.0, gt=0, lt=180, description="Horizontal field of view in degrees.")
     up: tuple[float, float, float] = Field((0.0, 1.0, 0.0), description="Up vector of the image.")
+
+    @model_validator(mode="after")
+    def _up(self) -> "Camera":
+        n = math.hypot(*self.up)
+        if n == 0 or abs(self.up[2]) / n > 0.999:  # the camera looks along -z
+            raise ValueError("up: must not be zero nor along the view axis (z): e.g. [0, 1, 0]")
+        return self
 
     @property
     def position(self) -> tuple[float, float, float]:
@@ -68,13 +84,23 @@ class ProbeScene(_Strict):
 
     @model_validator(mode="after")
     def _outside(self) -> "ProbeScene":
-        """The camera and the light must be outside the sphere, or the image is black."""
+        """The camera and the light outside the sphere, and the sphere in the camera's view, or the
+        image is black."""
         c, r = self.sphere.center, self.sphere.radius
         for name, pos in (("camera.distance", self.camera.position), ("light.r", self.light.position)):
             d = math.dist(pos, c)
             if d <= r:
                 raise ValueError(f"{name}: puts it {d:g} from the sphere's centre, inside the sphere (radius {r:g}): "
                                  "move it out")
+        eye = self.camera.position
+        forward = [t - e for t, e in zip(self.camera.target, eye)]
+        to_sphere = [x - e for x, e in zip(c, eye)]
+        angle = math.degrees(math.acos(max(-1.0, min(1.0, _dot(forward, to_sphere) / (
+            math.hypot(*forward) * math.hypot(*to_sphere))))))
+        reach = self.camera.fov / 2 + math.degrees(math.asin(min(1.0, r / math.dist(eye, c))))
+        if angle >= reach:
+            raise ValueError(f"camera.target: the sphere is {angle:.0f} degrees off the view axis, outside the camera's "
+                             f"view (it reaches {reach:.0f}): aim the camera at it")
         return self
 
     def overridden(self, *, resolution: int | None = None, spp: int | None = None,

@@ -53,6 +53,10 @@ class ParamSpec(_Strict):
                 raise ValueError(f"parameter {self.name!r}: lower must be below upper")
             if self.scale == "log" and self.lower <= 0:
                 raise ValueError(f"parameter {self.name!r}: log scale needs a positive lower bound")
+            vals = self.default if isinstance(self.default, (tuple, list)) else (self.default,)
+            if isinstance(self.default, str) or not all(self.lower <= float(v) <= self.upper for v in vals):
+                raise ValueError(f"parameter {self.name!r}: default {self.default} is outside [{self.lower:g}, "
+                                 f"{self.upper:g}]")
         return self
 
     @property
@@ -75,11 +79,11 @@ class ParamSpec(_Strict):
         if self.kind == "choice":
             if not isinstance(value, str) or value not in self.choices:
                 shown = ", ".join(self.choices[:12]) + (" …" if len(self.choices) > 12 else "")
-                raise ConfigError(f"{value!r} is not one of: {shown}", file=file, field=where)
+                raise ConfigError(f"{short(value)} is not one of: {shown}", file=file, field=where)
             return value
         if self.kind == "scalar":
             if isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise ConfigError(f"expected a number, got {value!r}", file=file, field=where)
+                raise ConfigError(f"expected a number, got {short(value)}", file=file, field=where)
             values = (float(value),)
         else:
             if isinstance(value, (int, float)) and not isinstance(value, bool):
@@ -89,7 +93,8 @@ class ParamSpec(_Strict):
             ):
                 values = tuple(float(v) for v in value)
             else:
-                raise ConfigError(f"expected a number or a list of 3 numbers (RGB), got {value!r}", file=file, field=where)
+                raise ConfigError(f"expected a number or a list of 3 numbers (RGB), got {short(value)}", file=file,
+                                  field=where)
         for v in values:
             if not math.isfinite(v) or not (self.lower <= v <= self.upper):
                 raise ConfigError(
@@ -207,6 +212,12 @@ def load_material(path: str | Path) -> Material:
     from .configio import load_yaml_model
 
     return load_yaml_model(path, Material, "a material")
+
+
+def short(value: Any, n: int = 80) -> str:
+    """A value's repr for an error message, cut to ``n`` characters (a pasted blob stays one line)."""
+    text = repr(value)
+    return text if len(text) <= n else text[:n] + "…"
 
 
 def format_value(v: Value) -> str:

@@ -44,15 +44,29 @@ def remove_orphans() -> list[Path]:
         return gone
     for p in entries:
         pid = _owner(p.name)
-        if pid is not None and not _alive(pid) and p.is_dir():
+        stale = not _alive(pid) if pid is not None else _older_than(p, OLD_STYLE_AGE)
+        if stale and p.is_dir():
             shutil.rmtree(p, ignore_errors=True)
             gone.append(p)
     return gone
 
 
+OLD_STYLE_AGE = 24 * 3600
+"""Folders named before they carried their process id: removed once a day old (no run lasts that)."""
+
+
+def _older_than(p: Path, seconds: float) -> bool:
+    import time
+
+    try:
+        return time.time() - p.stat().st_mtime > seconds
+    except OSError:
+        return False
+
+
 def _owner(name: str) -> int | None:
     parts = name[len(PREFIX):].split("-")
-    for part in parts[1:]:  # brdfremap-<kind>-<pid>-<random>; a kind may hold dashes
+    for part in parts[1:-1]:  # brdfremap-<kind>-<pid>-<random>; a kind may hold dashes
         if part.isdigit():
             return int(part)
     return None

@@ -1,14 +1,16 @@
 """The result store: one folder per job (a slot), each holding a complete result or none.
 
 A slot holds `result.json` and the files it lists (images, the native material), with their
-hashes: a result is found by its job's key and trusted only when every file matches. Files
-are written into a fresh folder beside them first and moved in after, `result.json` last: a
-full disk or a kill leaves the previous result (or none), never a mixed one. An output folder
-is owned by one run at a time (`owned`)."""
+hashes, and the report its own digest: a result is found by its job's key and trusted only when
+all of it matches. A new result is written into a staging folder first; the previous one is
+moved aside into a backup folder, the new one moved in (`result.json` last), and the backup
+removed. A kill at any moment leaves the previous result or the new one: a backup found at the
+next run is put back unless the new result is whole. A full disk fails while staging, leaving
+the previous result untouched. An output folder is owned by one run at a time (`owned`), and a
+folder holding another program's `result.json` is not written into."""
 
 from __future__ import annotations
 
-import errno
 import fcntl
 import hashlib
 import json
@@ -20,12 +22,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator
 
+from .atomic import why
 from .errors import ConfigError
 from .execute import Outcome
 from .report import NewerReportError, Report, read_report
 
 RESULT = "result.json"
 STAGING = ".staging-"
+BACKUP = ".previous-"
 LOCK = ".lock"
 
 
@@ -34,17 +38,18 @@ def check_folder(path: str | Path, flag: str = "--out") -> Path:
     if str(path).strip() == "":
         raise ConfigError("is empty: give a folder to write into", field=flag)
     p = Path(path)
-    if p.is_symlink() and not p.exists():
-        raise ConfigError("is a symbolic link to nothing (a dangling or looping link): remove it or choose another "
-                          "folder", field=f"{flag} {p}")
-    if p.exists() and not p.is_dir():
-        raise ConfigError("exists and is not a folder", field=f"{flag} {p}")
     try:
+        if p.is_symlink() and not p.exists():
+            raise ConfigError("is a symbolic link to nothing (a dangling or looping link): remove it or choose "
+                              "another folder", field=f"{flag} {p}")
+        if p.exists() and not p.is_dir():
+            raise ConfigError("exists and is not a folder", field=f"{flag} {p}")
         p.mkdir(parents=True, exist_ok=True)
-        probe = tempfile.NamedTemporaryFile(prefix=".probe-", dir=p)
-        probe.close()
+        tempfile.NamedTemporaryFile(prefix=".probe-", dir=p).close()
     except OSError as exc:
-        raise ConfigError(f"cannot write here: {_why(exc)}", field=f"{flag} {p}") from None
+        raise ConfigError(f"cannot write here: {why(exc)}", field=f"{flag} {p}") from None
+    if (p / RESULT).is_dir():
+        raise ConfigError(f"holds a folder named {RESULT}, where the result goes: move it", field=f"{flag} {p}")
     return p
 
 
@@ -53,25 +58,29 @@ def owned(path: str | Path, flag: str = "--out") -> Iterator[Path]:
     """The folder, checked and locked for this run: a second run into it gets a clear error
     (the lock is the kernel's, released however this process ends)."""
     folder = check_folder(path, flag)
-    fd = os.open(folder / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        fd = os.open(folder / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError as exc:
+        raise ConfigError(f"cannot take the folder's lock {folder / LOCK}: {why(exc)}", field=f"{flag} {folder}") \
+            from None
     try:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             raise ConfigError("another brdf-remap run is writing this folder; wait for it to finish or choose "
                               "another one", field=f"{flag} {folder}") from None
-        _check_parents(folder, flag)
+        check_not_owned(folder, flag)
         os.ftruncate(fd, 0)
         os.write(fd, f"{os.getpid()}\n".encode())
-        _remove_staging(folder)
+        _tidy(folder)
         yield folder
     finally:
         os.close(fd)
 
 
-def _check_parents(folder: Path, flag: str) -> None:
+def check_not_owned(folder: Path, flag: str = "--out") -> None:
     """A folder inside one another run owns (a sweep's point) is that run's to write."""
-    for parent in folder.resolve().parents:
+    for parent in Path(folder).resolve().parents:
         lock = parent / LOCK
         if not lock.is_file():
             continue
@@ -111,6 +120,7 @@ class Store:
     def inspect(self, slot: str) -> Stored:
         """The slot's complete result, or why what is there cannot be used."""
         folder = self.folder(slot)
+        _recover(folder)
         if not (folder / RESULT).exists():
             return Stored()
         try:
@@ -134,10 +144,13 @@ class Store:
         folder = self.folder(slot)
         try:
             folder.mkdir(parents=True, exist_ok=True)
-            _remove_staging(folder)
+            _tidy(folder)
+            if (folder / RESULT).exists() and not _ours(folder / RESULT):
+                raise ConfigError(f"holds a {RESULT} that brdf-remap did not write: not replaced (choose another "
+                                  "folder)", file=str(folder))
             staging = Path(tempfile.mkdtemp(prefix=STAGING, dir=folder))
         except OSError as exc:
-            raise ConfigError(f"cannot write: {_why(exc)}", file=str(folder)) from None
+            raise ConfigError(f"cannot write: {why(exc)}", file=str(folder)) from None
         try:
             return self._swap_in(folder, staging, outcome)
         finally:
@@ -147,17 +160,18 @@ class Store:
         doc = json.dumps(outcome.report.document(), indent=2, ensure_ascii=False) + "\n"
         for name, data in [*outcome.files.items(), (RESULT, doc.encode())]:
             _write(staging / name, data, folder / name)
-        previous = _listed_files(folder)
         try:
-            (folder / RESULT).unlink(missing_ok=True)  # the old result must not vouch for what follows
+            backup = Path(tempfile.mkdtemp(prefix=BACKUP, dir=folder))
+            for name in [RESULT, *sorted(_listed_files(folder))]:
+                if (folder / name).is_file():
+                    os.replace(folder / name, backup / name)  # the previous result, aside, whole
             for name in outcome.files:
                 os.replace(staging / name, folder / name)
-            for name in previous - set(outcome.files):
-                (folder / name).unlink(missing_ok=True)  # a file of the old result this one has not
             os.replace(staging / RESULT, folder / RESULT)
+            shutil.rmtree(backup, ignore_errors=True)
         except OSError as exc:
-            raise ConfigError(f"cannot move the result into place: {_why(exc)} (rerun to redo it)",
-                              file=str(folder)) from None
+            raise ConfigError(f"cannot move the result into place: {why(exc)} (the previous result is put back at "
+                              "the next run)", file=str(folder)) from None
         return [folder / n for n in outcome.files] + [folder / RESULT]
 
 
@@ -168,17 +182,32 @@ def _write(path: Path, data: bytes, shown: Path) -> None:
             f.flush()
             os.fsync(f.fileno())
     except OSError as exc:
-        raise ConfigError(f"cannot write: {_why(exc)} (the previous result, if any, is kept)",
+        raise ConfigError(f"cannot write: {why(exc)} (the previous result, if any, is kept)",
                           file=str(shown)) from None
 
 
+def _ours(path: Path) -> bool:
+    """Whether a result.json was written by brdf-remap (this format, or the one before it)."""
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return True  # unreadable or half-written: ours to replace (nothing else writes this name here)
+    if not isinstance(doc, dict):
+        return False
+    tool = doc.get("tool")
+    return (isinstance(tool, str) and tool.startswith("brdf-remap")) or {"engine", "metrics", "options"} <= set(doc)
+
+
 def _listed_files(folder: Path) -> set[str]:
+    """The files the previous brdf-remap result lists (those it owns beside its result.json)."""
+    if not (folder / RESULT).exists() or not _ours(folder / RESULT):
+        return set()
     try:
         doc = json.loads((folder / RESULT).read_text(encoding="utf-8"))
         names = {f["name"] if isinstance(f, dict) else f for f in doc.get("files", [])}
     except (OSError, ValueError, TypeError, KeyError, AttributeError):
         return set()
-    return {n for n in names if isinstance(n, str) and n and "/" not in n and n not in (".", "..")}
+    return {n for n in names if isinstance(n, str) and n and "/" not in n and n not in (".", "..", RESULT)}
 
 
 def _matches(path: Path, sha256: str, size: int) -> bool:
@@ -190,16 +219,36 @@ def _matches(path: Path, sha256: str, size: int) -> bool:
         return False
 
 
-def _remove_staging(folder: Path) -> None:
-    """Staging folders left by a run that was killed (safe: this run owns the folder)."""
+def _recover(folder: Path) -> None:
+    """A swap a kill interrupted: if the new result did not become whole, the previous one is
+    put back from its backup; the backup goes either way."""
+    try:
+        backups = sorted(folder.glob(BACKUP + "*"))
+    except OSError:
+        return
+    for backup in backups:
+        new = folder / RESULT
+        whole = new.exists() and _complete(folder)
+        if not whole:
+            for f in backup.iterdir():
+                os.replace(f, folder / f.name)
+        shutil.rmtree(backup, ignore_errors=True)
+
+
+def _complete(folder: Path) -> bool:
+    try:
+        report = read_report(folder / RESULT)
+    except ConfigError:
+        return False
+    return all(_matches(folder / f.name, f.sha256, f.bytes) for f in report.files)
+
+
+def _tidy(folder: Path) -> None:
+    """Staging folders left by a run that was killed; a backup of an interrupted swap put back
+    (safe: this run owns the folder)."""
+    _recover(folder)
     try:
         for p in folder.glob(STAGING + "*"):
             shutil.rmtree(p, ignore_errors=True)
     except OSError:
         pass
-
-
-def _why(exc: OSError) -> str:
-    if exc.errno == errno.ENOSPC:
-        return "no space left on the device"
-    return exc.strerror or str(exc)

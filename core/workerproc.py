@@ -19,6 +19,17 @@ from typing import Any
 
 from .errors import RenderError
 
+
+def die_with_parent() -> None:
+    """In a child process about to exec a renderer: the kernel kills it when remap dies, even by
+    kill -9 (Linux's parent-death signal; elsewhere a no-op)."""
+    try:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
 _LIVE: "weakref.WeakSet[JsonLinesWorker]" = weakref.WeakSet()
 
 
@@ -49,7 +60,7 @@ class JsonLinesWorker:
         try:
             self.proc = subprocess.Popen(
                 self.argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                bufsize=1, env=self.env, cwd=self.cwd, start_new_session=True)
+                bufsize=1, env=self.env, cwd=self.cwd, start_new_session=True, preexec_fn=die_with_parent)
         except OSError as exc:
             raise RenderError(f"{self.name}: cannot start {self.argv[0]!r}: {exc}") from exc
         threading.Thread(target=self._pump_answers, args=(self.proc.stdout, self._lines), daemon=True).start()

@@ -15,14 +15,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
 from brdfremap.core.appearance import Appearance
 from brdfremap.core.atomic import temp_beside, write_text_atomic
-from brdfremap.core.scratch import scratch_dir
 from brdfremap.core.errors import ConfigError, RenderError
 from brdfremap.core.protocol import Adapter, ModelChoice
 from brdfremap.core.scene import ProbeScene
 from brdfremap.core.schemas import Value
+from brdfremap.core.scratch import scratch_dir
 from brdfremap.core.workerproc import JsonLinesWorker
 
 from . import appearance as _appearance

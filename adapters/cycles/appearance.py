@@ -6,7 +6,13 @@ from __future__ import annotations
 
 import math
 
-from brdfremap.core.appearance import Appearance, as_rgb, conductor_f0, dielectric_f0, ior_from_f0
+from brdfremap.core.appearance import (
+    Appearance,
+    as_rgb,
+    conductor_f0,
+    dielectric_f0,
+    ior_from_f0,
+)
 from brdfremap.core.schemas import Value
 
 _DIST = {"beckmann": "beckmann", "ggx": "ggx", "multi_ggx": "ggx"}

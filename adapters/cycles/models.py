@@ -44,7 +44,7 @@ PRINCIPLED = ModelSpec(
               inert_when=METAL),
         ParamSpec(name="specular_tint", kind="rgb", default=(1.0, 1.0, 1.0), fit=False, description="Specular Tint."),
         _unit("coat_weight", 0.0, fit=False, desc="Coat Weight."),
-        _unit("coat_roughness", 0.03, fit=False, desc="Coat Roughness."),
+        _unit("coat_roughness", 0.03, fit=False, desc="Coat Roughness.", inert_when={"coat_weight": 0.0}),
     ),
     lobes=PASS_LOBES_PRINCIPLED,
 )

@@ -10,9 +10,14 @@ from typing import Any
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
-
-from brdfremap.core.appearance import (Appearance, as_rgb, dielectric_f0, eta_k_from_reflectivity,
-                                      reflectivity_edge_tint)
+from brdfremap.core import interrupt
+from brdfremap.core.appearance import (
+    Appearance,
+    as_rgb,
+    dielectric_f0,
+    eta_k_from_reflectivity,
+    reflectivity_edge_tint,
+)
 from brdfremap.core.atomic import write_text_atomic
 from brdfremap.core.errors import ConfigError, RenderError
 from brdfremap.core.protocol import Adapter, ModelChoice
@@ -24,7 +29,6 @@ from .appearance import EXT_IOR
 from .bsdfs import conductor_preset, register_bsdfs, trim_scale
 from .models import MODELS
 from .variant import as_dict, choose_variant
-
 
 
 def _rgb(v: Value) -> dict:
@@ -136,6 +140,7 @@ def bsdf_xml(model: str, p: dict[str, Value]) -> str:
 def _reraise_interrupt(exc: Exception) -> None:
     """Ctrl-C inside a Python plugin called from Mitsuba's C++ (or inside Dr.Jit's custom op that
     mi.render is) comes back as another error, with the interrupt in its text or its chain."""
+    interrupt.check()  # a signal that came during the render: raised as itself (Ctrl-C, SIGTERM)
     seen: BaseException | None = exc
     for _ in range(8):
         if seen is None:

@@ -6,8 +6,15 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-from brdfremap.core.appearance import (Appearance, as_rgb, conductor_f0, dielectric_f0, eta_k_from_reflectivity,
-                                      ior_from_f0, reflectivity_edge_tint)
+from brdfremap.core.appearance import (
+    Appearance,
+    as_rgb,
+    conductor_f0,
+    dielectric_f0,
+    eta_k_from_reflectivity,
+    ior_from_f0,
+    reflectivity_edge_tint,
+)
 from brdfremap.core.schemas import Value
 
 EXT_IOR = 1.000277  # Mitsuba's default exterior medium (air)

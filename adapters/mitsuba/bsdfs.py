@@ -23,7 +23,6 @@ from functools import lru_cache
 from typing import Any
 
 import numpy as np
-
 from brdfremap.core.appearance import eta_k_from_reflectivity
 
 INV_PI = 1.0 / math.pi

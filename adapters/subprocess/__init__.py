@@ -1,7 +1,8 @@
 """The subprocess adapter plugin: external renderers described by YAML files.
 
-Definitions are found in $BRDFREMAP_RENDERERS (a path list), ./configs/renderers and
-~/.config/brdfremap/renderers; `--adapter path/to/renderer.yaml` loads one directly."""
+Definitions are found in $BRDFREMAP_RENDERERS (a path list) and ~/.config/brdfremap/renderers
+(never the current folder: a data bundle must not choose a program); `--adapter
+path/to/renderer.yaml` loads one directly."""
 
 from pathlib import Path
 

@@ -18,14 +18,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
 from brdfremap.core.errors import ConfigError, RenderError
 from brdfremap.core.imageio import read_rgb
 from brdfremap.core.protocol import Adapter
 from brdfremap.core.scene import ProbeScene
-from brdfremap.core.scratch import scratch_dir
 from brdfremap.core.schemas import Value, format_value
-from brdfremap.core.workerproc import JsonLinesWorker
+from brdfremap.core.scratch import scratch_dir
+from brdfremap.core.workerproc import JsonLinesWorker, die_with_parent
 
 from .definition import _TOKEN, RendererDef, load_definition
 
@@ -56,6 +55,13 @@ def which(exe: str) -> str | None:
     such as `mitsuba`, are there even when the venv is not activated)."""
     path = os.environ.get("PATH", "") + os.pathsep + str(Path(sys.executable).parent)
     return shutil.which(exe, path=path)
+
+
+def _kill_group(proc: subprocess.Popen) -> None:
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)  # the whole group: the renderer's helpers too
+    except (ProcessLookupError, PermissionError):
+        pass
 
 
 def _srgb_to_linear(x: np.ndarray) -> np.ndarray:
@@ -182,19 +188,21 @@ class SubprocessAdapter(Adapter):
         argv = self._argv(p, values)
         try:
             proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                    text=True, env=self.env, cwd=self.here, start_new_session=True)
+                                    text=True, env=self.env, cwd=self.here, start_new_session=True,
+                                    preexec_fn=die_with_parent)
         except OSError as exc:
             raise self._fail(model, p, f"cannot run {argv[0]!r}: {exc}") from None
         try:
             out, err = proc.communicate(timeout=self.definition.timeout)
         except subprocess.TimeoutExpired:
-            try:
-                os.killpg(proc.pid, signal.SIGKILL)  # the whole group: the renderer's helpers too
-            except ProcessLookupError:
-                pass
+            _kill_group(proc)
             out, err = proc.communicate()
             raise self._fail(model, p, f"timed out after {self.definition.timeout:g} s (process group killed)",
                              err or out) from None
+        except BaseException:  # Ctrl-C, SIGTERM: the renderer (and its helpers) stop with remap
+            _kill_group(proc)
+            proc.communicate()
+            raise
         if proc.returncode != 0:
             raise self._fail(model, p, f"exit code {proc.returncode}", err or out)
         return err or out
@@ -249,7 +257,9 @@ def _version(path: Path, d: RendererDef) -> str:
 
 def search_dirs() -> list[Path]:
     dirs = [Path(p) for p in os.environ.get("BRDFREMAP_RENDERERS", "").split(os.pathsep) if p]
-    dirs += [Path.cwd() / "configs" / "renderers", Path.home() / ".config" / "brdfremap" / "renderers"]
+    # Not the current folder: a downloaded bundle (materials and a configs/renderers beside them)
+    # must not be able to choose the program a remap runs.
+    dirs += [Path.home() / ".config" / "brdfremap" / "renderers"]
     return [d for d in dict.fromkeys(dirs) if d.is_dir()]
 
 

@@ -6,10 +6,9 @@ import re
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
-
 from brdfremap.core.configio import load_yaml_model
 from brdfremap.core.schemas import LobeSpec, ModelSpec, ParamSpec
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 PLACEHOLDERS = ("scene_json", "params_json", "output", "model", "width", "height", "spp", "seed", "scene_file",
                 "python", "here", "defines")
@@ -120,7 +119,10 @@ def load_definition(path: str | Path) -> RendererDef:
     try:
         definition.model_specs()
     except ValueError as exc:
+        from brdfremap.core.configio import validation_message
         from brdfremap.core.errors import ConfigError
+        from pydantic import ValidationError
 
-        raise ConfigError(str(exc).splitlines()[-1], file=str(path), field="models") from exc
+        msg = validation_message(exc)[1] if isinstance(exc, ValidationError) else str(exc).splitlines()[0]
+        raise ConfigError(msg, file=str(path), field="models") from None
     return definition

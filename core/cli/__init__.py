@@ -10,15 +10,19 @@ import sys
 import traceback
 
 from .. import interrupt
-from ..errors import RemapError
+from ..errors import ConfigError, RemapError
 
 EXIT_USAGE = 2
+COMMANDS = ("convert", "render", "sweep", "roundtrip", "schema", "adapters")
 
 
 def _dispatch(argv: list[str]) -> int:
     from . import convert_cmd, experiment_cmd, remap_cmd, tools
 
     head, rest = (argv[0], argv[1:]) if argv else ("", [])
+    if head and not head.startswith("-") and head not in COMMANDS:
+        raise ConfigError(f"unknown command {head!r} (commands: {', '.join(COMMANDS)}; or `remap --adapter A --model M "
+                          "--source MATERIAL.yaml --out DIR` for one material; see `remap --help`)")
     if head == "adapters":
         return tools.adapters(tools.adapters_parser().parse_args(rest))
     if head == "schema":
@@ -43,12 +47,18 @@ def main(argv: list[str] | None = None) -> int:
             traceback.print_exc()
         print(f"remap: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
-    except KeyboardInterrupt:
-        print("remap: interrupted", file=sys.stderr)
-        return 130
-    except interrupt.Terminated:
-        print("remap: terminated", file=sys.stderr)
-        return 143
+    except (KeyboardInterrupt, interrupt.Terminated):
+        # A signal may come back as either (a renderer turned it into its own error and the next
+        # check raised it again): the signal that came decides what is said and the status.
+        status = interrupt.exit_status()
+        print("remap: interrupted" if status == 130 else "remap: terminated", file=sys.stderr)
+        return status
+    except OSError as exc:  # stdout or stderr gone (`remap ... > /dev/full`): results are already written
+        try:
+            print(f"remap: error: cannot write the output: {exc.strerror or exc}", file=sys.stderr)
+        except OSError:
+            pass
+        return EXIT_USAGE
     except BrokenPipeError:  # `remap ... | head`: the reader left; results are already written
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0

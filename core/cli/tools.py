@@ -122,18 +122,23 @@ def _image_path(text: str) -> Path:
     dangling one refused; its folder created and proved writable."""
     import tempfile
 
+    from ..atomic import why
+    from ..store import check_not_owned
+
     out = Path(text)
     if out.suffix.lower() not in (".exr", ".png"):
         raise ConfigError("must end in .exr (linear float) or .png (an sRGB preview)", field=f"--out {text}")
-    if out.is_symlink():
-        if not out.exists():
-            raise ConfigError("is a symbolic link to nothing: remove it or give another name", field=f"--out {text}")
-        out = Path(os.path.realpath(out))
-    if out.is_dir():
-        raise ConfigError("is a folder: give an image file name", field=f"--out {text}")
     try:
+        if out.is_symlink():
+            if not out.exists():
+                raise ConfigError("is a symbolic link to nothing: remove it or give another name",
+                                  field=f"--out {text}")
+            out = Path(os.path.realpath(out))
+        if out.is_dir():
+            raise ConfigError("is a folder: give an image file name", field=f"--out {text}")
         out.parent.mkdir(parents=True, exist_ok=True)
         tempfile.NamedTemporaryFile(prefix=".probe-", dir=out.parent).close()
     except OSError as exc:
-        raise ConfigError(f"cannot write into its folder: {exc.strerror or exc}", field=f"--out {text}") from None
+        raise ConfigError(f"cannot write into its folder: {why(exc)}", field=f"--out {text}") from None
+    check_not_owned(out.parent, "--out")  # a result folder another run is writing
     return out

@@ -8,7 +8,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..atomic import temp_beside
+from ..atomic import temp_beside, why
+from ..errors import ConfigError
 from .analysis import channels, quantity
 from .spec import label
 
@@ -34,8 +35,14 @@ def _save(fig, base: Path, svg: bool = True) -> Path:
     png = base.with_suffix(".png")
     for path, kw in [(png, {"dpi": 110})] + ([(base.with_suffix(".svg"), {"metadata": {"Date": None}})] if svg else []):
         tmp = temp_beside(path)
-        fig.savefig(tmp, format=path.suffix[1:], bbox_inches="tight", **kw)
-        tmp.replace(path)
+        try:
+            fig.savefig(tmp, format=path.suffix[1:], bbox_inches="tight", **kw)
+            tmp.replace(path)
+        except OSError as exc:
+            raise ConfigError(f"cannot write: {why(exc)} (the previous file, if any, is kept)", file=str(path)) \
+                from None
+        finally:
+            tmp.unlink(missing_ok=True)
     return png
 
 

@@ -6,6 +6,8 @@ alone is redone; the table, summary and plots are rebuilt from the reports at th
 
 from __future__ import annotations
 
+import json
+import re
 import time
 from pathlib import Path
 
@@ -35,6 +37,7 @@ def run_experiment(exp: Experiment, file: str, out: str | Path, registry: Adapte
         back = exp.back_side()
         model_of(registry, back.adapter, back.model, file, "back.").complete(back.fix, file=file, prefix="back.fix")
     with owned(out) as folder:
+        _check_outputs(folder, file)
         write_text_atomic(folder / "experiment.json", exp.model_dump_json(indent=2) + "\n")
         runner = Runner(Store(folder / "points"), workers, renderer_files=renderer_files, quiet=quiet,
                         line=lambda d, i, n: _line(exp, d, i, n))
@@ -118,15 +121,40 @@ def _source_quantities(d: Done) -> dict:
     return {**src.params, **src.derived}
 
 
+OUTPUTS = ("experiment.json", "results.csv", "summary.json", "sweep.png", "sweep.svg", "roundtrip.png",
+           "roundtrip.svg", "points")
+
+
+def _check_outputs(folder: Path, file: str) -> None:
+    """Before the first point: the names the experiment writes must be free to write."""
+    for name in OUTPUTS:
+        p = folder / name
+        if name != "points" and p.is_dir():
+            raise ConfigError(f"holds a folder named {name}, where the experiment writes a file: move it",
+                              field=f"--out {folder}")
+        if name == "points" and p.exists() and not p.is_dir():
+            raise ConfigError("holds a file named points, where the experiment keeps its points: move it",
+                              field=f"--out {folder}")
+
+
+def _previous_cliffs(folder: Path) -> set[str]:
+    """The cliff figures the previous run listed in its summary (the only ones this run may remove)."""
+    try:
+        doc = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+        return {n for n in doc.get("files", []) if isinstance(n, str) and re.fullmatch(r"cliff-\d+\.png", n)}
+    except (OSError, ValueError, AttributeError):
+        return set()
+
+
 def _write_outputs(folder: Path, exp: Experiment, rows: list[Row], cliffs: list[dict], fit) -> list[Path]:
+    previous = _previous_cliffs(folder)
     files = [write_csv(folder / "results.csv", exp, rows), sweep_plot(folder / "sweep", exp, rows)]
     if exp.kind == "roundtrip":
         files.append(roundtrip_plot(folder / "roundtrip", exp, rows, fit))
     for n, c in enumerate(cliffs):
         files.append(cliff_figure(folder / f"cliff-{n + 1}.png", exp, rows[c["before"]], rows[c["after"]], folder))
-    for stale in folder.glob("cliff-*.png"):
-        if stale not in files:
-            stale.unlink(missing_ok=True)  # a cliff of an earlier run that this one does not have
+    for stale in previous - {p.name for p in files}:
+        (folder / stale).unlink(missing_ok=True)  # a cliff of an earlier run that this one does not have
     return files
 
 

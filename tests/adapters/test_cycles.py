@@ -62,8 +62,8 @@ def test_what_principled_declares_inert_leaves_the_image_unchanged(cycles_adapte
     p = _p(cycles_adapter, "principled", base_color=[0.9, 0.6, 0.3], metallic=1.0, roughness=0.3)
     ref = cycles_adapter.render("principled", p, SCENE)
     inert = [q.name for q in spec.parameters if q.inert_when]
-    assert set(inert) == {"ior", "specular_ior_level"}
-    for name, value in (("ior", 2.4), ("specular_ior_level", 0.1)):
+    assert set(inert) == {"ior", "specular_ior_level", "coat_roughness"}
+    for name, value in (("ior", 2.4), ("specular_ior_level", 0.1), ("coat_roughness", 0.6)):  # coat_weight is 0
         assert spec.is_inert(name, p)
         assert np.array_equal(cycles_adapter.render("principled", {**p, name: value}, SCENE), ref), name
     # Not inert below 1, and Specular Tint (the F82 edge tint) does reach a metal.

@@ -2,7 +2,6 @@
 renderer loads, and the report opened in a real headless Chromium."""
 
 import json
-import os
 import signal
 import subprocess
 import sys
@@ -10,7 +9,6 @@ import time
 from pathlib import Path
 
 import pytest
-
 from brdfremap.core.cli import main
 from helpers import ROOT, one_line_error, open_in_chromium, remap
 from reports import read_result
@@ -106,7 +104,6 @@ def test_materialx_of_each_shader_type_converts_to_mitsuba(tmp_path, mitsuba_ada
 
 def test_a_library_converted_to_principled_is_also_valid_materialx(tmp_path, cycles_adapter):
     import MaterialX as mx
-
     from brdfremap.adapters.materialx.reader import standard_libraries
 
     out = tmp_path / "lib"

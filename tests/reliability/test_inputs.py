@@ -129,3 +129,62 @@ def test_a_report_written_by_a_newer_version_is_not_overwritten(tmp_path, mitsub
     one_line_error(remap("--source", GOLD, "--out", out, *SMALL), "written by a newer brdf-remap",
                    "nothing was overwritten")
     assert json.loads((out / "result.json").read_text())["schema_version"] == 99
+
+
+@pytest.mark.parametrize("text, words", [
+    ("adapter: mitsuba\nmodel: roughconductor\nparams: {alpha: 0.1, alpha: 0.2}\n", "'alpha' is given twice"),
+    ("adapter: mitsuba\nmodel: roughconductor\nb: &b {alpha: 0.1}\nparams: {<<: *b}\n",
+     "aliases (*name) and merge keys (<<) are not supported"),
+    ("adapter: mitsuba\nmodel: roughconductor\nparams: {alpha: " + "[" * 5000 + "]" * 5000 + "}\n",
+     "nested too deeply"),
+    ("adapter: mitsuba\nmodel: roughconductor\nparams: {alpha: " + "x" * 100000 + "}\n", "expected a number"),
+])
+def test_hostile_yaml_is_one_short_line(tmp_path, text, words):
+    """A flow mapping's duplicate, anchors and merge keys (a "billion laughs" file expands to
+    gigabytes), deep nesting, a huge value: one short line each."""
+    mat = _write(tmp_path / "m.yaml", text)
+    line = one_line_error(remap("render", mat, "--out", tmp_path / "x.exr", timeout=60), words)
+    assert len(line) < 400
+
+
+@pytest.mark.parametrize("scene, words", [
+    ("camera: {target: [0, 100, 0]}", "camera.target: the sphere is 86 degrees off the view axis"),
+    ("sphere: {center: [0, 0, 10]}", "camera.target: the sphere is 180 degrees off the view axis"),
+    ("camera: {up: [0, 0, 0]}", "camera: up: must not be zero nor along the view axis"),
+    ("camera: {up: [0, 0, 1]}", "camera: up: must not be zero nor along the view axis"),
+    ("light: {intensity: .inf}", "light.intensity: Input should be a finite number"),
+])
+def test_a_scene_that_would_render_black_is_refused_naming_the_field(tmp_path, scene, words):
+    one_line_error(remap("render", GOLD, "--scene", _write(tmp_path / "s.yaml", scene + "\n"),
+                         "--out", tmp_path / "x.exr"), "s.yaml", words)
+
+
+@pytest.mark.parametrize("args, words", [
+    (["rendr", str(GOLD), "--out", "x.exr"], "unknown command 'rendr' (commands: convert, render"),
+    (["render", "RESULT", "--out", "x.exr"], "is a result (result.json) file, where a material was expected"),
+    (["--adapter", "cycles", "--model", "principled", "--source", str(GOLD), "--out", "o", "--fix",
+      "coat_roughness=0.1"], "--fix coat_roughness: does nothing with coat_weight=0"),
+])
+def test_a_mistaken_command_file_or_fix_is_named(tmp_path, args, words, mitsuba_adapter):
+    out = tmp_path / "r"
+    assert remap("--source", GOLD, "--out", out, *SMALL, "--quiet").returncode == 0
+    args = [str(out / "result.json") if a == "RESULT" else a for a in args]
+    one_line_error(remap(*args, cwd=tmp_path), words)
+
+
+def test_a_sweep_on_an_empty_scheduler_address_is_refused(tmp_path):
+    exp = _write(tmp_path / "e.yaml", "kind: sweep\nname: t\nsource: {adapter: mitsuba, model: roughconductor}\n"
+                                      "sweep: {param: alpha, values: [0.1]}\ntarget: {adapter: mitsuba, model: "
+                                      "roughconductor}\nplot: {x: source.alpha, y: target.alpha}\n")
+    one_line_error(remap("sweep", exp, "--out", tmp_path / "o", "--scheduler", ""), "--scheduler: is empty")
+
+
+@pytest.mark.parametrize("models, words", [
+    ("{m: {parameters: [{name: a, kind: scalar, default: 0.5}, {name: a, kind: scalar, default: 0.5}]}}",
+     "models: model 'm' has duplicate parameter names"),
+    ("{m: {parameters: [{name: a, kind: scalar, upper: 1, default: 5}]}}", "parameter 'a': default 5.0 is outside [0, 1]"),
+])
+def test_a_definitions_model_mistakes_are_one_line_when_it_is_loaded(tmp_path, models, words):
+    d = _write(tmp_path / "d.yaml", f'name: d\ncommand: ["x", "{{output}}"]\nmodels: {models}\n')
+    line = one_line_error(remap("--adapter", d, "--model", "m", "--source", GOLD, "--out", tmp_path / "o"), "d.yaml")
+    assert words in line and "errors.pydantic.dev" not in line

@@ -127,3 +127,89 @@ def test_a_remap_into_a_running_sweeps_point_is_refused(tmp_path, mitsuba_adapte
     with owned(tmp_path / "sweep"):
         proc = remap("--source", GOLD, "--out", tmp_path / "sweep" / "points" / "00-003", *SMALL)
     one_line_error(proc, "which another brdf-remap run is writing")
+
+
+def test_a_folder_holding_another_programs_result_json_is_not_written_and_nothing_is_deleted(tmp_path,
+                                                                                              mitsuba_adapter):
+    """A result.json brdf-remap did not write names files of the user's: they are not removed."""
+    out = tmp_path / "proj"
+    out.mkdir()
+    (out / "thesis.tex").write_text("chapter 1")
+    (out / "result.json").write_text('{"tool": "other", "files": ["thesis.tex", {"name": "thesis.tex"}]}')
+    one_line_error(remap("--source", GOLD, "--out", out, *SMALL, "--quiet"), "that brdf-remap did not write")
+    assert (out / "thesis.tex").read_text() == "chapter 1" and '"other"' in (out / "result.json").read_text()
+
+
+def test_an_edited_report_is_not_taken_for_the_result(tmp_path, mitsuba_adapter):
+    import json
+
+    out = tmp_path / "o"
+    assert remap("--source", GOLD, "--out", out, *SMALL, "--quiet").returncode == 0
+    doc = json.loads((out / "result.json").read_text())
+    doc["metrics"]["relative_rmse"] = 0.001
+    (out / "result.json").write_text(json.dumps(doc))
+    stored = Store(out).inspect("")
+    assert stored.report is None and "edited after it was written" in stored.problem
+    rerun = remap("--source", GOLD, "--out", out, *SMALL)
+    assert rerun.returncode == 0 and "was replaced: " in rerun.stderr and "edited" in rerun.stderr
+
+
+def test_an_interrupted_swap_leaves_the_previous_result_or_the_new_one(tmp_path, mitsuba_adapter):
+    """Case 5's other half: killed while the new result is moved in (its files half there, no
+    result.json yet), the folder gets its previous result back at the next look."""
+    out = tmp_path / "o"
+    assert remap("--source", GOLD, "--out", out, *SMALL, "--quiet").returncode == 0
+    before = (out / "result.json").read_bytes()
+    backup = out / ".previous-killed"
+    backup.mkdir()
+    for name in ("result.json", "target.exr", "source.png"):
+        os.replace(out / name, backup / name)  # as the swap does, just before the kill
+    (out / "target.exr").write_bytes(b"half of the new result")
+    stored = Store(out).inspect("")
+    assert stored.report is not None and (out / "result.json").read_bytes() == before and not backup.exists()
+
+
+def test_render_into_a_running_sweeps_folder_and_a_disk_that_fills_are_refused(tmp_path, mitsuba_adapter):
+    from brdfremap.core.store import owned
+
+    with owned(tmp_path / "sweep"):
+        one_line_error(remap("render", GOLD, "--out", tmp_path / "sweep" / "points" / "p" / "t.exr"),
+                       "which another brdf-remap run is writing")
+    with SmallFilesystem(tmp_path / "fs", "1m") as fs:
+        if fs is None:
+            pytest.skip("cannot mount a tmpfs here (needs root)")
+        image = fs / "r.exr"
+        assert remap("render", GOLD, "--out", image, "--resolution", "32", "--quiet").returncode == 0
+        size = image.stat().st_size
+        fill(fs, leave=0)
+        one_line_error(remap("render", GOLD, "--out", image, "--resolution", "64", "--quiet"),
+                       "no space left on the device", "the previous file, if any, is kept")
+        assert image.stat().st_size == size and not [p for p in os.listdir(fs) if p.startswith(".r.")]
+
+
+@pytest.mark.parametrize("obstacle", ["lock is a folder", "result.json is a folder", "name too long"])
+def test_an_obstructed_out_is_one_line_before_any_render(tmp_path, obstacle, mitsuba_adapter):
+    out = tmp_path / ("x" * 300 if obstacle == "name too long" else "o")
+    if obstacle != "name too long":
+        (out / (".lock" if obstacle.startswith("lock") else "result.json")).mkdir(parents=True)
+    proc = remap("--source", GOLD, "--out", out, *SMALL)
+    one_line_error(proc, "--out")
+    assert "  [" not in proc.stderr
+    if obstacle == "name too long":
+        one_line_error(remap("render", GOLD, "--out", str(out) + ".exr"), "too long")
+
+
+def test_a_sweep_keeps_the_users_files_and_refuses_an_obstructed_folder(tmp_path, mitsuba_adapter):
+    exp = tmp_path / "exp.yaml"
+    exp.write_text("kind: sweep\nname: t\nsource: {adapter: mitsuba, model: roughconductor}\n"
+                   "sweep: {param: alpha, values: [0.1, 0.2]}\ntarget: {adapter: mitsuba, model: roughconductor}\n"
+                   "scene: {resolution: 32}\nplot: {x: source.alpha, y: target.alpha}\n")
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "cliff-edge-holiday.png").write_bytes(b"a photo")
+    assert remap("sweep", exp, "--out", out, "--quiet").returncode == 0
+    assert (out / "cliff-edge-holiday.png").read_bytes() == b"a photo"
+    (tmp_path / "o2" / "results.csv").mkdir(parents=True)
+    proc = remap("sweep", exp, "--out", tmp_path / "o2")
+    one_line_error(proc, "holds a folder named results.csv")
+    assert not (tmp_path / "o2" / "points").exists()

@@ -201,3 +201,80 @@ def test_a_scheduler_address_that_is_not_dask_is_one_line(tmp_path):
                              f"tcp://127.0.0.1:{port}"), "cannot reach the Dask scheduler")
     finally:
         server.close()
+
+
+def test_a_bundles_configs_renderers_folder_runs_nothing(tmp_path):
+    """Case 2 again: definitions are not read from the current folder, so a downloaded bundle with
+    configs/renderers/evil.yaml naming `adapter: shiny` cannot choose a program."""
+    bundle = tmp_path / "bundle"
+    (bundle / "configs" / "renderers").mkdir(parents=True)
+    pwned = tmp_path / "PWNED"
+    (bundle / "configs" / "renderers" / "evil.yaml").write_text(
+        f'name: shiny\ncommand: ["sh", "-c", "id > {pwned}; exit 1", "{{output}}"]\n'
+        "models: {metal: {parameters: [{name: a, kind: scalar, default: 0.5}]}}\n")
+    (bundle / "brass.yaml").write_text("adapter: shiny\nmodel: metal\n")
+    for args in (["render", "brass.yaml", "--out", "x.exr"],
+                 ["--source", "brass.yaml", "--adapter", "mitsuba", "--model", "diffuse", "--out", "o"]):
+        one_line_error(remap(*args, cwd=bundle), "unknown adapter 'shiny'")
+    assert not pwned.exists()
+
+
+@pytest.mark.parametrize("sig, status", [(signal.SIGINT, 130), (signal.SIGTERM, 143), (signal.SIGHUP, 129),
+                                         (signal.SIGKILL, -9)])
+def test_an_external_renderer_stops_with_remap(tmp_path, sig, status):
+    """Case 10: the renderer (and its helper) outlived remap on every signal; now it is killed with
+    its process group on Ctrl-C, SIGTERM and SIGHUP, and by the kernel when remap is killed."""
+    mat = tmp_path / "m.yaml"
+    mat.write_text("adapter: mitsuba\nmodel: diffuse\n")
+    cmd = [sys.executable, "-m", "brdfremap.core.cli", "--adapter", str(DATA / "fake-oneshot.yaml"), "--model",
+           "lambert", "--source", str(mat), "--out", str(tmp_path / "o"), "--fix", "fault=hang", "--resolution", "16"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline, renderer = time.time() + 60, None
+    while renderer is None and time.time() < deadline:
+        found = subprocess.run(["pgrep", "-f", "fake_renderer.py"], capture_output=True, text=True).stdout.split()
+        renderer = int(found[0]) if found else None
+        time.sleep(0.05)
+    assert renderer is not None, proc.communicate()
+    time.sleep(0.3)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == status and "Traceback" not in err, (proc.returncode, err)
+    deadline = time.time() + 10
+    while _alive(renderer) and time.time() < deadline:
+        time.sleep(0.1)
+    alive = _alive(renderer)
+    # After kill -9 the kernel kills the renderer itself; a helper it started (the fake's sleep)
+    # is the renderer's to stop, and is cleaned up here so that it does not outlive the test.
+    subprocess.run(["pkill", "-f", "import time; time.sleep\\(120\\)"], capture_output=True)
+    assert not alive, "the renderer outlived remap"
+
+
+@pytest.mark.parametrize("sig, status, said", [(signal.SIGTERM, 143, "terminated"), (signal.SIGHUP, 129, "terminated"),
+                                               (signal.SIGINT, 130, "interrupted")])
+def test_a_signal_mid_fit_gives_its_own_exit_status(tmp_path, sig, status, said, mitsuba_adapter):
+    """SIGTERM during a Mitsuba remap said 'interrupted' and exited 130 (the renderer turned it into
+    a KeyboardInterrupt); the signal that came decides."""
+    cmd = [sys.executable, "-m", "brdfremap.core.cli", "--adapter", "mitsuba", "--model", "principled", "--source",
+           str(MATERIALS / "gold.yaml"), "--out", str(tmp_path / "o"), "--resolution", "128", "--spp", "2048",
+           "--coarse", "0", "--start", "defaults"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 60
+    while not (tmp_path / "o" / ".lock").exists() and time.time() < deadline:
+        time.sleep(0.02)
+    time.sleep(1.5)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == status and f"remap: {said}" in err and "Traceback" not in err, (proc.returncode, err)
+
+
+def test_a_definition_taking_an_installed_adapters_name_breaks_nothing(tmp_path, mitsuba_adapter):
+    folder = tmp_path / "renderers"
+    folder.mkdir()
+    (folder / "m.yaml").write_text((DATA / "fake-oneshot.yaml").read_text().replace("name: fake-oneshot",
+                                                                                  "name: mitsuba"))
+    env = {"BRDFREMAP_RENDERERS": str(folder)}
+    listed = remap("adapters", env=env)
+    assert f"renderer definition {folder / 'm.yaml'}: its name 'mitsuba' is an installed adapter's" in listed.stdout
+    ok = remap("render", MATERIALS / "gold.yaml", "--out", tmp_path / "x.exr", "--resolution", "16", "--quiet",
+               env=env)
+    assert ok.returncode == 0, ok.stderr

@@ -4,7 +4,6 @@ package), the project's YAML; their errors name the file."""
 from pathlib import Path
 
 import pytest
-
 from brdfremap.core.errors import ConfigError
 from brdfremap.core.library.formats import collect_formats, expand_inputs, read_all
 
