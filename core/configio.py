@@ -93,7 +93,11 @@ def validation_message(exc: ValidationError) -> tuple[str, str]:
     errors = exc.errors()
     # A misspelt field also leaves a required one missing; the misspelling is the news.
     err = next((e for e in errors if e["type"] == "extra_forbidden"), errors[0])
-    field = ".".join(str(p) for p in err["loc"])
+    from .model import UNION_TAGS
+
+    loc = err["loc"]
+    field = ".".join(str(p) for i, p in enumerate(loc)
+                     if not (p in UNION_TAGS and i > 0 and isinstance(loc[i - 1], int)))
     msg = err["msg"]
     if err["type"] == "extra_forbidden":
         msg = "unknown field (remove it or check its spelling)"
@@ -116,16 +120,17 @@ def _role(data: dict) -> str | None:
     return next((role for role, keys in _ROLES.items() if keys <= set(data)), None)
 
 
-def load_yaml_model(path: str | Path, model: type[M], what: str = "") -> M:
+def load_yaml_model(path: str | Path, model: type[M], what: str = "", context: dict | None = None) -> M:
     """A model from a YAML file. ``what`` ("a material", "an experiment", ...) names the file's
-    expected kind: a file of another kind is said to be one."""
+    expected kind: a file of another kind is said to be one. ``context`` goes to the validators
+    (a scene resolves a map's path against its file's folder)."""
     data = read_yaml(path)
     if data is None:
         raise ConfigError(f"is empty: expected {what or 'a YAML mapping'}", file=str(path))
     if not isinstance(data, dict):
         raise ConfigError(f"expected a mapping at the top level, got {type(data).__name__}", file=str(path))
     try:
-        return model.model_validate(data)
+        return model.model_validate(data, context=context)
     except ValidationError as exc:
         role = _role(data)
         if what and role and role != what:

@@ -6,6 +6,10 @@ from typing import Any, ClassVar
 
 from pydantic import BaseModel, ConfigDict, model_validator
 
+UNION_TAGS: set[str] = set()
+"""The tags of discriminated unions (a light's `type`): pydantic puts the tag in an error's
+location (`lights.0.environment.map`), which error messages leave out (`lights.0.map`)."""
+
 
 class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)

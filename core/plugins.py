@@ -39,6 +39,15 @@ class AdapterEntry:
         except Exception as exc:  # a broken plugin is reported when it renders, not here
             return f"{getattr(self.factory, 'version', '1')} (identity unknown: {type(exc).__name__})"
 
+    @property
+    def light_types(self) -> frozenset[str]:
+        return frozenset(getattr(self.factory, "light_types", frozenset({"point"})))
+
+    def scene_problem(self, scene) -> str | None:
+        """Why this adapter cannot render ``scene`` (`Adapter.scene_problem`), or None."""
+        check = getattr(self.factory, "scene_problem", None)
+        return None if check is None else check(scene)
+
     def unavailable_reason(self) -> str | None:
         try:
             return self.factory.unavailable_reason()

@@ -36,6 +36,18 @@ class Adapter(abc.ABC):
     summary: ClassVar[str] = ""
     install_hint: ClassVar[str] = ""
     models: ClassVar[dict[str, ModelSpec]] = {}
+    light_types: ClassVar[frozenset[str]] = frozenset({"point"})
+    """The light types of `core.scene` this adapter realises, in the same units and orientation
+    as every other (its calibration tests cover each)."""
+
+    @classmethod
+    def scene_problem(cls, scene: ProbeScene) -> str | None:
+        """Why this adapter cannot render ``scene`` (a fact, no advice), or None: checked before
+        any render. The default refuses a light type it does not declare. Must be cheap: no renderer import."""
+        missing = sorted(scene.light_types() - set(cls.light_types))
+        if missing:
+            return f"has no {' or '.join(missing)} light (it renders {', '.join(sorted(cls.light_types))} lights)"
+        return None
 
     @classmethod
     def unavailable_reason(cls) -> str | None:

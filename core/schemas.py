@@ -25,7 +25,14 @@ class ParamSpec(_Strict):
     default: Value = Field(description="Value used when neither the source nor --fix gives one.")
     choices: tuple[str, ...] = Field((), description="Allowed values of a choice parameter.")
     scale: Literal["linear", "log"] = Field("linear", description="How the optimiser normalises it to [0, 1].")
+    typical: tuple[float, float] | None = Field(
+        None, description="Scalar only: where a fit's spread starts lie when the bounds reach further (a roughness "
+                          "down to a mirror's: a start there renders a sub-pixel highlight, nearly black, and wins "
+                          "on error while no gradient leads out of it). None: the bounds.")
     fit: bool = Field(True, description="Fitted by default when it is the target (choices never are).")
+    explore: bool = Field(False, description="Choice only: when the source's reading does not say which value, the "
+                                             "fit tries each at the coarse level and keeps the best (a microfacet "
+                                             "distribution).")
     separable: bool = Field(True, description="RGB only: each image channel depends on its own component alone "
                                               "(an albedo or tint in an RGB renderer), so one render gives "
                                               "all three Jacobian columns.")
@@ -49,6 +56,8 @@ class ParamSpec(_Strict):
             if not self.choices or self.default not in self.choices:
                 raise ValueError(f"choice parameter {self.name!r} needs choices that include its default")
         else:
+            if self.explore:
+                raise ValueError(f"parameter {self.name!r}: only a choice can be explored")
             if not self.lower < self.upper:
                 raise ValueError(f"parameter {self.name!r}: lower must be below upper")
             if self.scale == "log" and self.lower <= 0:
@@ -57,6 +66,9 @@ class ParamSpec(_Strict):
             if isinstance(self.default, str) or not all(self.lower <= float(v) <= self.upper for v in vals):
                 raise ValueError(f"parameter {self.name!r}: default {self.default} is outside [{self.lower:g}, "
                                  f"{self.upper:g}]")
+        if self.typical is not None and not (self.kind == "scalar" and self.lower <= self.typical[0]
+                                             < self.typical[1] <= self.upper):
+            raise ValueError(f"parameter {self.name!r}: typical must be a scalar's range within its bounds")
         return self
 
     @property

@@ -39,8 +39,12 @@ def _worker_count() -> int:
         except ValueError:
             raise ConfigError(f"must be a whole number of worker processes, got {raw!r}",
                               field="BRDFREMAP_CYCLES_WORKERS") from None
-        if n < 1:
-            raise ConfigError("must be at least 1", field="BRDFREMAP_CYCLES_WORKERS")
+        most = max(1, os.cpu_count() or 1)
+        if not 1 <= n <= most:
+            # Each worker is a Blender (about 275 MB) rendering on every core already: more than
+            # one per core only competes (the third trial's 100000 ran the machine out of memory).
+            raise ConfigError(f"must be from 1 to {most} (this machine's cores), got {n}",
+                              field="BRDFREMAP_CYCLES_WORKERS")
         return n
     # Two where there are two cores: measured on 2 cores (bench/workers.py), a warm remap to
     # Principled is 1.03x as fast (1.11x before Jacobians were updated between rendered ones)
@@ -95,6 +99,7 @@ class CyclesAdapter(Adapter):
     summary = "Blender Cycles (bpy, CPU) in a persistent worker process"
     install_hint = "pip install 'brdf-remap[cycles]' (bpy 5.0, Python 3.11)"
     models = MODELS
+    light_types = frozenset({"point", "environment"})
     max_cached = 8
 
     @classmethod

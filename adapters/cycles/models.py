@@ -33,7 +33,7 @@ PRINCIPLED = ModelSpec(
     name="principled",
     description="Principled BSDF (multiscatter GGX by default). Lobes by render passes.",
     parameters=(
-        ParamSpec(name="distribution", kind="choice", default="multi_ggx", choices=("multi_ggx", "ggx"),
+        ParamSpec(name="distribution", kind="choice", default="multi_ggx", choices=("multi_ggx", "ggx"), explore=True,
                   description="Microfacet distribution of the Principled BSDF."),
         ParamSpec(name="base_color", kind="rgb", default=(0.8, 0.8, 0.8), description="Base Color."),
         _unit("metallic", 0.0, desc="Metallic."),
@@ -53,7 +53,7 @@ GLOSSY = ModelSpec(
     name="glossy",
     description="Glossy BSDF: a microfacet lobe with a constant colour (no Fresnel).",
     parameters=(
-        ParamSpec(name="distribution", kind="choice", default="ggx",
+        ParamSpec(name="distribution", kind="choice", default="ggx", explore=True,
                   choices=("beckmann", "ggx", "ashikhmin_shirley", "multi_ggx"), description="Distribution."),
         ParamSpec(name="color", kind="rgb", default=(0.8, 0.8, 0.8), linear_in=("full", "specular"), description="Color."),
         _unit("roughness", 0.3, desc="Roughness (α = roughness²)."),
@@ -75,7 +75,7 @@ METALLIC = ModelSpec(
     name="metallic",
     description="Metallic BSDF with the physical conductor Fresnel (complex IOR per channel).",
     parameters=(
-        ParamSpec(name="distribution", kind="choice", default="multi_ggx", choices=("beckmann", "ggx", "multi_ggx"),
+        ParamSpec(name="distribution", kind="choice", default="multi_ggx", choices=("beckmann", "ggx", "multi_ggx"), explore=True,
                   description="Distribution."),
         ParamSpec(name="ior", kind="rgb", lower=0.0, upper=8.0, default=(0.2, 0.4, 1.4), description="IOR (eta)."),
         ParamSpec(name="extinction", kind="rgb", lower=0.0, upper=10.0, default=(3.9, 2.4, 1.6),

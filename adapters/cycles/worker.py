@@ -72,16 +72,12 @@ class BlenderState:
         scene.view_settings.look = "None"
         scene.view_settings.exposure = 0.0
         scene.view_settings.gamma = 1.0
-        world = bpy.data.worlds.new("black")
-        scene.world = world
-        world.use_nodes = True
-        bg = world.node_tree.nodes.get("Background")
-        bg.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
-        bg.inputs["Strength"].default_value = 0.0
+        self._world(scene, next((x for x in sc_json["lights"] if x["type"] == "environment"), None))
         self._camera(scene, sc_json["camera"])
-        self._light(scene, sc_json["light"])
+        for i, light in enumerate(x for x in sc_json["lights"] if x["type"] == "point"):
+            self._light(scene, light, "probe-light" if i == 0 else f"probe-light{i}")
         self._sphere(scene, sc_json["sphere"])
-        # One point light: nothing for a light tree to choose between (bench/cycles_render.py).
+        # A few lights: nothing for a light tree to choose between (bench/cycles_render.py).
         cy.use_light_tree = False
         self.passes = None  # the lobe passes are switched on per request (see render)
         ims = r.image_settings
@@ -109,16 +105,48 @@ class BlenderState:
         scene.collection.objects.link(obj)
         scene.camera = obj
 
-    def _light(self, scene, light: dict) -> None:
+    def _world(self, scene, env: dict | None) -> None:
+        """Black, or the environment map: the direction d of the scene's convention (u = atan2(x, -z)
+        / 2pi, v = acos(y) / pi: core.environment) is (d_z, d_x, d_y) in Blender's equirectangular
+        lookup (u = 0.5 - atan2(y, x) / 2pi, up +z; found alike by trying every axis order and sign
+        against the analytic image: tests/adapters/test_lights.py). Unseen by the camera (a transparent film: the background stays black)."""
         bpy = self.bpy
-        data = bpy.data.lights.new("probe-light", "POINT")
+        world = bpy.data.worlds.new("probe-world")
+        scene.world = world
+        world.use_nodes = True
+        tree = world.node_tree
+        bg = tree.nodes.get("Background")
+        if env is None:
+            bg.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+            bg.inputs["Strength"].default_value = 0.0
+            return
+        scene.render.film_transparent = True
+        coords, split, join = (tree.nodes.new(t) for t in ("ShaderNodeTexCoord", "ShaderNodeSeparateXYZ",
+                                                           "ShaderNodeCombineXYZ"))
+        tree.links.new(coords.outputs["Generated"], split.inputs[0])
+        for src, dst in (("Z", "X"), ("X", "Y"), ("Y", "Z")):
+            tree.links.new(split.outputs[src], join.inputs[dst])
+        tex = tree.nodes.new("ShaderNodeTexEnvironment")
+        tex.image = bpy.data.images.load(env["file"], check_existing=False)
+        tex.image.colorspace_settings.name = "Linear Rec.709"
+        tex.interpolation = "Linear"
+        tex.projection = "EQUIRECTANGULAR"
+        tree.links.new(join.outputs[0], tex.inputs["Vector"])
+        tree.links.new(tex.outputs["Color"], bg.inputs["Color"])
+        bg.inputs["Strength"].default_value = 1.0
+        world.cycles.sampling_method = "MANUAL"
+        world.cycles.sample_map_resolution = max(tex.image.size[0], 64)
+
+    def _light(self, scene, light: dict, name: str) -> None:
+        bpy = self.bpy
+        data = bpy.data.lights.new(name, "POINT")
         # Blender's point-light power in W is 4π × the radiant intensity in W/sr.
         data.energy = 4.0 * math.pi * light["intensity"]
         data.shadow_soft_size = 0.0
         data.color = (1.0, 1.0, 1.0)
         if hasattr(data, "use_soft_falloff"):
             data.use_soft_falloff = False
-        obj = bpy.data.objects.new("probe-light", data)
+        obj = bpy.data.objects.new(name, data)
         obj.location = tuple(light["position"])
         scene.collection.objects.link(obj)
 

@@ -21,7 +21,7 @@ from brdfremap.core.appearance import (
 from brdfremap.core.atomic import write_text_atomic
 from brdfremap.core.errors import ConfigError, RenderError
 from brdfremap.core.protocol import Adapter, ModelChoice
-from brdfremap.core.scene import ProbeScene
+from brdfremap.core.scene import PointLight, ProbeScene
 from brdfremap.core.schemas import Value
 
 from . import appearance as _appearance
@@ -33,6 +33,20 @@ from .variant import as_dict, choose_variant
 
 def _rgb(v: Value) -> dict:
     return {"type": "rgb", "value": list(v)}  # type: ignore[arg-type]
+
+
+def emitters(scene: ProbeScene) -> dict[str, Any]:
+    """The scene's lights as Mitsuba emitters: a point light is `point` (intensity in W/sr), the
+    environment `envmap` with an identity transform (`core.environment`'s orientation is Mitsuba's)."""
+    out: dict[str, Any] = {}
+    for i, light in enumerate(scene.lights):
+        if isinstance(light, PointLight):
+            out["light" if i == 0 else f"light{i}"] = {
+                "type": "point", "position": list(light.position),
+                "intensity": {"type": "rgb", "value": [light.intensity] * 3}}
+        else:
+            out["environment"] = {"type": "envmap", "filename": light.document()["file"]}
+    return out
 
 
 def bsdf_dict(model: str, p: dict[str, Value]) -> dict[str, Any]:
@@ -155,6 +169,7 @@ class MitsubaAdapter(Adapter):
     summary = "Mitsuba 3, in process (llvm_ad_rgb when a working libLLVM is found, else scalar_rgb)"
     install_hint = "pip install 'brdf-remap[mitsuba]'"
     models = MODELS
+    light_types = frozenset({"point", "environment"})
     max_scenes = 8
 
     @classmethod
@@ -203,10 +218,15 @@ class MitsubaAdapter(Adapter):
     def scene_dict(self, model: str, params: dict[str, Value], scene: ProbeScene) -> dict[str, Any]:
         mi = self.mi
         cam = scene.camera
+        integrator: dict[str, Any] = {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0}
+        if scene.environment is not None:
+            # An environment is reached by BSDF sampling too (a sharp lobe sees it no other way),
+            # and is not seen behind the sphere: the background stays black.
+            integrator.update(bsdf_samples=1, hide_emitters=True)
         return {
             "type": "scene",
             # Direct lighting only; a point light is reached by emitter sampling alone.
-            "integrator": {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0},
+            "integrator": integrator,
             "sensor": {
                 "type": "perspective", "fov": cam.fov, "fov_axis": "x",
                 "to_world": mi.ScalarTransform4f().look_at(origin=list(cam.position), target=list(cam.target),
@@ -217,8 +237,7 @@ class MitsubaAdapter(Adapter):
             },
             "probe": {"type": "sphere", "center": list(scene.sphere.center), "radius": scene.sphere.radius,
                       "bsdf": bsdf_dict(model, params)},
-            "light": {"type": "point", "position": list(scene.light.position),
-                      "intensity": {"type": "rgb", "value": [scene.light.intensity] * 3}},
+            **emitters(scene),
         }
 
     def _scene(self, model: str, params: dict[str, Value], scene: ProbeScene):

@@ -70,6 +70,8 @@ def from_appearance(model: str, a: Appearance) -> dict[str, Value]:
     metal = a.kind == "conductor"
     spec = a.specular if metal else (float(sum(a.specular)) / 3,) * 3
     out: dict[str, Value] = {}
+    if a.distribution is not None and model in ("roughconductor", "roughplastic"):
+        out["distribution"] = a.distribution
     if a.alpha is not None:
         if model == "phong":
             out["exponent"] = max(2.0 / a.alpha**2 - 2.0, 1.0)

@@ -563,7 +563,8 @@ def register_bsdfs() -> None:
             rs = (term1 - term2) / (term1 + term2)
             term3 = a2pb2 * c2 + s2 * s2
             term4 = term2 * s2
-            rp = rs * (term3 - term4) / (term3 + term4)
+            # At normal incidence p is s; for eta = k = 0 (a preset's channel) term3 + term4 is 0 there.
+            rp = dr.select(term3 + term4 > 1e-20, rs * (term3 - term4) / (term3 + term4), rs)
             return 0.5 * (rp + rs)
 
         def _fresnel_dielectric(self, c):

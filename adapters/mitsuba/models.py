@@ -11,8 +11,8 @@ CONDUCTOR_PRESETS = (
     "Rh", "Se", "SiC", "SnTe", "Ta", "Te", "ThF4", "TiC", "TiN", "TiO2", "VC", "V_palik", "VN", "W",
 )
 DISTRIBUTION = ParamSpec(name="distribution", kind="choice", default="beckmann", choices=("beckmann", "ggx"),
-                         description="Microfacet distribution.")
-ALPHA = ParamSpec(name="alpha", kind="scalar", lower=0.002, upper=1.0, default=0.1, scale="log",
+                         explore=True, description="Microfacet distribution.")
+ALPHA = ParamSpec(name="alpha", kind="scalar", lower=1e-4, upper=1.0, default=0.1, scale="log", typical=(0.002, 1.0),
                   description="Microfacet roughness α (Mitsuba's convention, not Blender's √α).")
 SPEC_REFL = ParamSpec(name="specular_reflectance", kind="rgb", default=(1.0, 1.0, 1.0), fit=False,
                       linear_in=("specular",), description="Multiplier on the specular term (physically 1).")

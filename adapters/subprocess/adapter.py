@@ -30,7 +30,7 @@ from .definition import _TOKEN, RendererDef, load_definition
 
 
 def template_vars(scene: ProbeScene) -> dict[str, str]:
-    cam, light, sph = scene.camera, scene.light, scene.sphere
+    cam, light, sph = scene.camera, scene.point_lights[0], scene.sphere
     out = {"width": scene.resolution, "height": scene.resolution, "spp": scene.spp, "seed": scene.seed,
            "fov": cam.fov, "sphere_radius": sph.radius, "light_intensity": light.intensity}
     for prefix, vec in (("camera", cam.position), ("target", cam.target), ("up", cam.up),
@@ -73,6 +73,14 @@ class SubprocessAdapter(Adapter):
 
     definition: RendererDef
     source_file: Path
+
+    @classmethod
+    def scene_problem(cls, scene: ProbeScene) -> str | None:
+        """A command-line renderer gets one point light (its ``{light_*}`` placeholders)."""
+        problem = super().scene_problem(scene)
+        if problem is None and any(len(v.lights) > 1 for v in scene.all_views()):
+            return "takes one point light per view (its {light_*} placeholders)"
+        return problem
 
     @classmethod
     def unavailable_reason(cls) -> str | None:

@@ -1,6 +1,7 @@
 """External renderers from YAML: the good path and every fault, with a real misbehaving process."""
 
 import json
+import os
 import subprocess
 import sys
 import time
@@ -61,13 +62,15 @@ def test_faults_are_render_errors_naming_renderer_params_and_stderr(oneshot, fau
         assert f"stderr: fake renderer: fault={fault}" in msg
 
 
-def test_timeout_kills_the_whole_process_group(oneshot):
+def test_timeout_kills_the_whole_process_group(oneshot, monkeypatch):
+    token = f"brdfremap-hang-test-{os.getpid()}-{time.monotonic_ns()}"  # this run's helper, not another checkout's
+    monkeypatch.setitem(oneshot.env, "FAKE_HANG_TOKEN", token)
     t0 = time.monotonic()
     with pytest.raises(RenderError, match="timed out after 5 s \\(process group killed\\)"):
         oneshot.render("lambert", _p(oneshot, fault="hang"), SCENE)
     assert time.monotonic() - t0 < 60  # killed at the 5 s timeout, not after the 120 s hang
     time.sleep(0.5)
-    left = subprocess.run(["pgrep", "-f", "import time; time.sleep\\(120\\)"], capture_output=True, text=True)
+    left = subprocess.run(["pgrep", "-f", token], capture_output=True, text=True)
     assert left.stdout.strip() == "", "the renderer's helper process survived"
 
 

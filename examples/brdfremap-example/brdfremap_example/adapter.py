@@ -41,15 +41,17 @@ class ToyAdapter(Adapter):
         self.calls += 1
         p = self.models[model].with_lobe(params, lobe)
         hits = sphere_hits(scene)
-        e, l = point_light_irradiance(scene, hits)
-        h = l + hits.view
-        h /= np.linalg.norm(h, axis=-1, keepdims=True)
-        cos_h = np.clip((h * hits.normal).sum(-1), 1e-6, 1.0)
-        tan2 = (1 - cos_h**2) / cos_h**2
         a = p["alpha"]
-        spec = p["specular"] * np.exp(-tan2 / a**2) / (math.pi * a**2 * cos_h**4) / 4
-        f = np.asarray(p["diffuse"]) / math.pi + spec[..., None]
-        return (f * e[..., None]).astype(np.float32)
+        image = np.zeros((*hits.mask.shape, 3))
+        for light in scene.point_lights:  # the lights add up
+            e, l = point_light_irradiance(scene, hits, light)
+            h = l + hits.view
+            h /= np.linalg.norm(h, axis=-1, keepdims=True)
+            cos_h = np.clip((h * hits.normal).sum(-1), 1e-6, 1.0)
+            tan2 = (1 - cos_h**2) / cos_h**2
+            spec = p["specular"] * np.exp(-tan2 / a**2) / (math.pi * a**2 * cos_h**4) / 4
+            image += (np.asarray(p["diffuse"]) / math.pi + spec[..., None]) * e[..., None]
+        return image.astype(np.float32)
 
     # The neutral reading that gives a remap its informed start (optional for an adapter): the
     # toy's lobe is Gaussian in the half-vector angle like Beckmann's, and its specular weight
