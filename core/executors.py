@@ -66,11 +66,27 @@ def workers(jobs: int = 1, scheduler: str | None = None) -> Iterator[Workers]:
         try:
             yield Workers(pool, jobs, f"up to {jobs} local processes")
         except BaseException:
-            pool.shutdown(wait=False, cancel_futures=True)  # the workers see this process go and stop
+            _stop(pool)
             raise
         pool.shutdown(wait=True)
     else:
         yield Workers(InlineExecutor(), 1, "this process")
+
+
+def _stop(pool: cf.ProcessPoolExecutor) -> None:
+    """Stop a pool at once (a signal, an error): its workers are ended, not waited for. Waiting
+    would outlast any render under way (the third trial's SIGTERM left a sweep running: the
+    interpreter joins the workers at exit, and they stop only once this process is gone). Their
+    renderers follow them (a parent-death signal, a process group)."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())  # the stdlib offers no public handle
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        try:
+            p.terminate()
+        except (OSError, ValueError, AttributeError):
+            pass
+    for p in procs:
+        p.join(timeout=5)
 
 
 @contextmanager

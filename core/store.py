@@ -24,7 +24,7 @@ from typing import Iterator
 
 from .atomic import why
 from .errors import ConfigError
-from .execute import Outcome
+from .execute import IMAGES, Outcome
 from .report import NewerReportError, Report, read_report
 
 RESULT = "result.json"
@@ -48,8 +48,9 @@ def check_folder(path: str | Path, flag: str = "--out") -> Path:
         tempfile.NamedTemporaryFile(prefix=".probe-", dir=p).close()
     except OSError as exc:
         raise ConfigError(f"cannot write here: {why(exc)}", field=f"{flag} {p}") from None
-    if (p / RESULT).is_dir():
-        raise ConfigError(f"holds a folder named {RESULT}, where the result goes: move it", field=f"{flag} {p}")
+    for name in (RESULT, *IMAGES):
+        if (p / name).is_dir():
+            raise ConfigError(f"holds a folder named {name}, where the result goes: move it", field=f"{flag} {p}")
     return p
 
 
@@ -160,18 +161,19 @@ class Store:
         doc = json.dumps(outcome.report.document(), indent=2, ensure_ascii=False) + "\n"
         for name, data in [*outcome.files.items(), (RESULT, doc.encode())]:
             _write(staging / name, data, folder / name)
+        moving = folder
         try:
             backup = Path(tempfile.mkdtemp(prefix=BACKUP, dir=folder))
             for name in [RESULT, *sorted(_listed_files(folder))]:
                 if (folder / name).is_file():
                     os.replace(folder / name, backup / name)  # the previous result, aside, whole
-            for name in outcome.files:
-                os.replace(staging / name, folder / name)
-            os.replace(staging / RESULT, folder / RESULT)
+            for name in [*outcome.files, RESULT]:
+                moving = folder / name
+                os.replace(staging / name, moving)
             shutil.rmtree(backup, ignore_errors=True)
         except OSError as exc:
             raise ConfigError(f"cannot move the result into place: {why(exc)} (the previous result is put back at "
-                              "the next run)", file=str(folder)) from None
+                              "the next run)", file=str(moving)) from None
         return [folder / n for n in outcome.files] + [folder / RESULT]
 
 
@@ -199,15 +201,20 @@ def _ours(path: Path) -> bool:
 
 
 def _listed_files(folder: Path) -> set[str]:
-    """The files the previous brdf-remap result lists (those it owns beside its result.json)."""
+    """The files the previous brdf-remap result owns beside its result.json: those it lists with
+    their hash, and only while they still have it. A listed name alone proves nothing (a
+    result.json can be written by anyone): a file that is not byte for byte what brdf-remap
+    wrote is never moved aside, hence never deleted."""
     if not (folder / RESULT).exists() or not _ours(folder / RESULT):
         return set()
     try:
         doc = json.loads((folder / RESULT).read_text(encoding="utf-8"))
-        names = {f["name"] if isinstance(f, dict) else f for f in doc.get("files", [])}
+        records = [(f["name"], f["sha256"], f["bytes"]) for f in doc.get("files", []) if isinstance(f, dict)]
     except (OSError, ValueError, TypeError, KeyError, AttributeError):
         return set()
-    return {n for n in names if isinstance(n, str) and n and "/" not in n and n not in (".", "..", RESULT)}
+    return {n for n, sha, size in records
+            if isinstance(n, str) and n and "/" not in n and n not in (".", "..", RESULT)
+            and isinstance(sha, str) and isinstance(size, int) and _matches(folder / n, sha, size)}
 
 
 def _matches(path: Path, sha256: str, size: int) -> bool:

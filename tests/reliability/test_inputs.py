@@ -152,7 +152,7 @@ def test_hostile_yaml_is_one_short_line(tmp_path, text, words):
     ("sphere: {center: [0, 0, 10]}", "camera.target: the sphere is 180 degrees off the view axis"),
     ("camera: {up: [0, 0, 0]}", "camera: up: must not be zero nor along the view axis"),
     ("camera: {up: [0, 0, 1]}", "camera: up: must not be zero nor along the view axis"),
-    ("light: {intensity: .inf}", "light.intensity: Input should be a finite number"),
+    ("light: {intensity: .inf}", "lights.0.intensity: Input should be a finite number"),
 ])
 def test_a_scene_that_would_render_black_is_refused_naming_the_field(tmp_path, scene, words):
     one_line_error(remap("render", GOLD, "--scene", _write(tmp_path / "s.yaml", scene + "\n"),
@@ -188,3 +188,10 @@ def test_a_definitions_model_mistakes_are_one_line_when_it_is_loaded(tmp_path, m
     d = _write(tmp_path / "d.yaml", f'name: d\ncommand: ["x", "{{output}}"]\nmodels: {models}\n')
     line = one_line_error(remap("--adapter", d, "--model", "m", "--source", GOLD, "--out", tmp_path / "o"), "d.yaml")
     assert words in line and "errors.pydantic.dev" not in line
+
+
+def test_more_cycles_workers_than_cores_is_refused_naming_the_variable(tmp_path):
+    """Third trial N8: BRDFREMAP_CYCLES_WORKERS=100000 started Blenders without bound (275 MB each)."""
+    proc = remap("render", MATERIALS / "cycles-red-plastic.yaml", "--out", tmp_path / "x.exr",
+                 env={"BRDFREMAP_CYCLES_WORKERS": "100000"})
+    one_line_error(proc, "BRDFREMAP_CYCLES_WORKERS", "100000", "cores")

@@ -140,6 +140,28 @@ def test_a_folder_holding_another_programs_result_json_is_not_written_and_nothin
     assert (out / "thesis.tex").read_text() == "chapter 1" and '"other"' in (out / "result.json").read_text()
 
 
+@pytest.mark.parametrize("files", [["thesis.tex"], [{"name": "thesis.tex", "sha256": "0" * 64, "bytes": 9}]])
+def test_a_result_json_claiming_to_be_ours_cannot_get_a_users_file_deleted(tmp_path, mitsuba_adapter, files):
+    """Third trial N1: `{"tool": "brdf-remap 0.1.0", "files": ["thesis.tex"]}` made the next remap
+    delete thesis.tex. A listed file goes only while it is byte for byte what brdf-remap wrote."""
+    import json
+
+    out = tmp_path / "proj"
+    out.mkdir()
+    (out / "thesis.tex").write_text("chapter 1")
+    (out / "result.json").write_text(json.dumps({"tool": "brdf-remap 0.1.0", "files": files}))
+    remap("--source", GOLD, "--out", out, *SMALL, "--quiet", "--validate", "none")
+    assert (out / "thesis.tex").read_text() == "chapter 1"
+
+
+def test_a_folder_where_an_image_goes_is_named_before_any_render(tmp_path):
+    """Third trial N2: a folder named target.exr failed after the fit, naming neither."""
+    (tmp_path / "o" / "target.exr").mkdir(parents=True)
+    proc = remap("--source", GOLD, "--out", tmp_path / "o", *SMALL)
+    one_line_error(proc, "target.exr", "move it")
+    assert "renders" not in proc.stdout
+
+
 def test_an_edited_report_is_not_taken_for_the_result(tmp_path, mitsuba_adapter):
     import json
 

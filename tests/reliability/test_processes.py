@@ -111,6 +111,38 @@ def test_a_sweep_on_local_processes_killed_leaves_no_worker_behind(tmp_path, sig
     assert rerun.returncode == 0 and "remaps resumed" in rerun.stdout, rerun.stderr
 
 
+def test_sigterm_stops_a_sweep_whose_workers_are_mid_render(tmp_path):
+    """Third trial N9: SIGTERM to `remap sweep --jobs 2` while both workers waited on a slow
+    renderer printed "terminated" and went on: the interpreter joined the workers at exit, and
+    they stopped only once it was gone. The workers are ended now, not waited for."""
+    defs = tmp_path / "defs"
+    defs.mkdir()
+    text = (DATA / "fake-oneshot.yaml").read_text().replace("{here}", str(DATA)).replace("timeout: 5", "timeout: 120")
+    (defs / "slow.yaml").write_text(text.replace("name: fake-oneshot", "name: slow"))
+    exp = tmp_path / "exp.yaml"
+    exp.write_text("kind: sweep\nname: hang\nsource: {adapter: mitsuba, model: diffuse}\n"
+                   "sweep: {param: reflectance, values: [0.2, 0.5, 0.7]}\n"
+                   "target: {adapter: slow, model: lambert, fix: {fault: hang}}\n"
+                   "scene: {resolution: 16, spp: 4}\nplot: {x: source.reflectance, y: target.albedo}\n")
+    cmd = [sys.executable, "-m", "brdfremap.core.cli", "sweep", str(exp), "--out", str(tmp_path / "o"), "--jobs", "2",
+           "--quiet"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env={**os.environ, "BRDFREMAP_RENDERERS": str(defs)})
+    deadline = time.time() + 60
+    while len([p for p in _children(proc.pid) if _alive(p)]) < 2 or not _renderers_started(proc.pid):
+        assert proc.poll() is None and time.time() < deadline, proc.communicate()
+        time.sleep(0.2)
+    t0 = time.time()
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143 and time.time() - t0 < 20, err
+
+
+def _renderers_started(pid: int) -> bool:
+    """Whether a grandchild of ``pid`` (a renderer a pool worker started) is running."""
+    return any(_children(w) for w in _children(pid))
+
+
 def test_a_scratch_folder_of_a_killed_process_is_removed_by_the_next_one(tmp_path):
     """Case 10: /dev/shm scratch folders stayed after kill -9; each is named after its process,
     and the next adapter to start removes those whose process is gone."""

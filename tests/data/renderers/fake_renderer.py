@@ -47,7 +47,8 @@ def render(scene_doc, params, output):
         print("fake renderer: cannot parse the material", file=sys.stderr)
         sys.exit(3)
     if fault == "hang":
-        subprocess.Popen([sys.executable, "-c", "import time; time.sleep(120)"])  # a helper to be killed too
+        token = os.environ.get("FAKE_HANG_TOKEN", "")  # names this run's helper for the test that looks for it
+        subprocess.Popen([sys.executable, "-c", "import time; time.sleep(120)", token])  # a helper to be killed too
         time.sleep(120)
     if fault == "no_output":
         return
