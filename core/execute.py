@@ -22,6 +22,7 @@ import numpy as np
 from .atomic import why
 from .engine import ProgressFn, remap
 from .errors import RemapError, RenderError
+from .fitscene import choose as choose_scene
 from .imageio import write_exr, write_previews
 from .job import Job, Resolved, resolve
 from .plugins import AdapterRegistry, collect_adapters
@@ -29,6 +30,10 @@ from .protocol import Adapter
 from .renders import CachedRenderer, ProbeRenders
 from .report import FileRecord, Report, build_report
 from .schemas import Value
+
+
+IMAGES = ("source.exr", "target.exr", "source.png", "target.png", "error.png")
+"""The files every result has, besides the target's native material."""
 
 
 @dataclass
@@ -104,17 +109,20 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
     src, tgt = job.source, job.target
     source = CachedRenderer(adapters[src.adapter], src.adapter, src.model, job.scene)
     target = CachedRenderer(adapters[tgt.adapter], tgt.adapter, tgt.model, job.scene)
-    renders = ProbeRenders(source, resolved.source_params, resolved.source_spec, target, job.scene)
     if progress:
         progress("source", 0, float("nan"))
+    env_ok = all("environment" in adapters[n].light_types for n in (src.adapter, tgt.adapter))
+    fit = choose_scene(lambda sc: source(resolved.source_params, scene=sc), job.scene, env_ok,
+                       job.settings.resolve_limit, job.settings.fit_scene)
+    renders = ProbeRenders(source, resolved.source_params, resolved.source_spec, target, fit.scene, given=job.scene)
     start = informed_start(resolved, adapters) if job.settings.start == "informed" else {}
     result = remap(resolved.target_spec, {**resolved.base, **start}, resolved.free, renders, job.settings, job.tuning,
-                   progress)
+                   progress, alternatives=alternatives(resolved, start) if job.settings.start == "informed" else [])
     files = artifacts(adapters[tgt.adapter], tgt.model, result.params, renders.source_image(), result.target_image)
     info = describe(adapters, list(dict.fromkeys((src.adapter, tgt.adapter))))
     derived = (adapters[src.adapter].derived(src.model, resolved.source_params),
                adapters[tgt.adapter].derived(tgt.model, result.params))
-    report = build_report(resolved, result, start=start, derived=derived, source_renders=renders.source_renders(),
+    report = build_report(resolved, result, start=start, derived=derived, fit_scene=fit, source_renders=renders.source_renders(),
                           renders_by_resolution=target.renders_by_resolution(), seconds=time.perf_counter() - t0,
                           adapters=info, files=[FileRecord(name=n, sha256=hashlib.sha256(b).hexdigest(), bytes=len(b))
                                                 for n, b in files.items()])
@@ -131,7 +139,7 @@ def artifacts(adapter: Adapter, model: str, params: dict[str, Value], source: np
             write_exr(d / "source.exr", source)
             write_exr(d / "target.exr", target)
             write_previews(d, source, target)
-            paths = [d / n for n in ("source.exr", "target.exr", "source.png", "target.png", "error.png")]
+            paths = [d / n for n in IMAGES]
             paths += [Path(p) for p in adapter.write_native(model, params, d)]
             return {p.name: p.read_bytes() for p in paths}
     except (OSError, RemapError) as exc:
@@ -142,22 +150,42 @@ def artifacts(adapter: Adapter, model: str, params: dict[str, Value], source: np
 
 def informed_start(resolved: Resolved, adapters: AdapterPool) -> dict[str, Value]:
     """The exporters' conversion of the source into the target's fitted parameters (clipped to
-    their bounds), or {} when either adapter has no neutral reading for its model. A value of
-    the wrong shape or not finite is left out: the start is a hint, the fit does not need it."""
+    their bounds) and its discrete choices (a distribution the source names, unless held), or {}
+    when either adapter has no neutral reading for its model. A value of the wrong shape or not
+    finite is left out: the start is a hint, the fit does not need it."""
     job = resolved.job
     look = adapters[job.source.adapter].appearance(job.source.model, resolved.source_params)
     if look is None:
         return {}
     conv = adapters[job.target.adapter].from_appearance(job.target.model, look, dict(resolved.base))
     out: dict[str, Value] = {}
+    spec = resolved.target_spec
+    for p in spec.parameters:
+        if (p.kind == "choice" and p.name not in resolved.fixed and conv.get(p.name) in p.choices
+                and conv[p.name] != resolved.base[p.name]):
+            out[p.name] = conv[p.name]
     for name in resolved.free:
         try:
-            v = resolved.target_spec.param(name).clip(conv[name])
+            v = spec.param(name).clip(conv[name])
         except (KeyError, TypeError, ValueError):
             continue
         if all(map(math.isfinite, v if isinstance(v, tuple) else (v,))):  # type: ignore[arg-type]
             out[name] = v
     return out
+
+
+def alternatives(resolved: Resolved, start: dict[str, Value]) -> list[dict[str, Value]]:
+    """The discrete choices to try: every value of each explorable choice (`ParamSpec.explore`)
+    that neither the user held, nor the source carried (same model), nor the start named.
+    [] when there is nothing to try."""
+    same = (resolved.job.source.adapter, resolved.job.source.model) == (resolved.job.target.adapter,
+                                                                        resolved.job.target.model)
+    open_ = [p for p in resolved.target_spec.parameters if p.kind == "choice" and p.explore and not same
+             and p.name not in resolved.fixed and p.name not in start]
+    combos: list[dict[str, Value]] = [{}]
+    for p in open_:
+        combos = [{**c, p.name: v} for c in combos for v in p.choices]
+    return combos if len(combos) > 1 else []
 
 
 def describe(adapters: AdapterPool, names: list[str]) -> dict[str, dict[str, Any]]:

@@ -39,13 +39,68 @@ class _Note(_Finding):
         return "note"
 
 
+def _beyond(error: float, beyond: float | None) -> str:
+    return "" if beyond is None or beyond >= 0.995 * error else f", {beyond:.1%} beyond the render noise,"
+
+
 class ErrorAboveThreshold(_Finding):
     kind: Literal["error_above_threshold"] = "error_above_threshold"
     error: float
     threshold: float
+    beyond_noise: float | None = Field(None, description="The part of the error the render noise does not explain "
+                                                         "(what the threshold judges).")
 
     def sentence(self) -> str:
-        return f"error {self.error:.1%} above the {self.threshold:.0%} threshold"
+        return f"error {self.error:.1%}{_beyond(self.error, self.beyond_noise)} above the {self.threshold:.0%} threshold"
+
+
+class HeldOutError(Strict):
+    condition: str
+    label: str
+    error: float
+    beyond_noise: float
+
+    def words(self) -> str:
+        return f"{self.label} {self.error:.1%}" + (
+            "" if self.beyond_noise >= 0.995 * self.error else f" ({self.beyond_noise:.1%} beyond the noise)")
+
+
+class HeldOutAbove(_Finding):
+    """Matches under the scene's lights but not under held-out ones: it does not look the same there."""
+
+    kind: Literal["held_out_above"] = "held_out_above"
+    conditions: list[HeldOutError]
+    threshold: float
+
+    def sentence(self) -> str:
+        return (f"does not look the same under held-out lights: {', '.join(c.words() for c in self.conditions)}, "
+                f"over the {self.threshold:.0%} threshold")
+
+
+class CannotResolve(_Finding):
+    """The renders are too noisy to tell a match from a mismatch: no error here means anything."""
+
+    kind: Literal["cannot_resolve"] = "cannot_resolve"
+    condition: str = Field(description="'scene' (the fit's own scene) or a held-out condition.")
+    label: str = Field(description="The condition in words.")
+    noise_floor: float
+    limit: float
+    advice: str
+    elsewhere: bool = Field(False, description="Other conditions did resolve the material and judge the result: "
+                                               "then this one is a note.")
+
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def severity(self) -> Severity:
+        return "note" if self.elsewhere else "unreliable"
+
+    def sentence(self) -> str:
+        where = self.label
+        if self.elsewhere:
+            return (f"{where} cannot resolve this material (two renders of one material differ by "
+                    f"{self.noise_floor:.0%}, over the {self.limit:.0%} limit): not judged there")
+        return (f"{where} cannot resolve this material: two renders of one material differ by {self.noise_floor:.0%} "
+                f"(over the {self.limit:.0%} limit), so its error says nothing; {self.advice}")
 
 
 class ModelMismatch(_Finding):
@@ -55,9 +110,11 @@ class ModelMismatch(_Finding):
     kind: Literal["model_mismatch"] = "model_mismatch"
     error: float
     threshold: float
+    beyond_noise: float | None = None
 
     def sentence(self) -> str:
-        return (f"error {self.error:.1%} above the {self.threshold:.0%} threshold although the fit converged with no "
+        return (f"error {self.error:.1%}{_beyond(self.error, self.beyond_noise)} above the {self.threshold:.0%} "
+                "threshold although the fit converged with no "
                 "parameter pinned and a well-conditioned Jacobian: a model mismatch (the closest this target model "
                 "gets), not a failed fit")
 
@@ -105,6 +162,48 @@ class RendererAlters(_Finding):
 
     def sentence(self) -> str:
         return f"the renderer alters the fitted parameters: {self.detail}"
+
+
+class ValidationSkipped(_Note):
+    kind: Literal["validation_skipped"] = "validation_skipped"
+    condition: str
+    why: str
+
+    def sentence(self) -> str:
+        return f"held-out condition {self.condition} not checked: {self.why}"
+
+
+class NothingFitted(_Note):
+    kind: Literal["nothing_fitted"] = "nothing_fitted"
+
+    def sentence(self) -> str:
+        return "every parameter was held: the two materials are compared as given, nothing was fitted"
+
+
+class StartKept(_Note):
+    """Every fitted point was worse at the scene's resolution and samples than the informed start."""
+
+    kind: Literal["start_kept"] = "start_kept"
+    start_error: float
+    fitted_error: float
+
+    def sentence(self) -> str:
+        return (f"the fit ended at {self.fitted_error:.2%} at the scene's resolution and samples, worse than the "
+                f"informed start's {self.start_error:.2%}: the start is kept")
+
+
+class ChoiceTried(_Note):
+    """The reading did not say which value a discrete choice takes: each was fitted briefly, the best kept."""
+
+    kind: Literal["choice_tried"] = "choice_tried"
+    errors: dict[str, float] = Field(description="Relative RMSE each choice reached at the level it was tried, "
+                                                 "by choice (e.g. 'distribution=ggx').")
+    chosen: str
+    resolution: int
+
+    def sentence(self) -> str:
+        tried = ", ".join(f"{k} {v:.2%}" for k, v in self.errors.items())
+        return f"the source does not say which to use: tried {tried} at {self.resolution} px; kept {self.chosen}"
 
 
 class SchemeChosen(_Note):
@@ -168,8 +267,9 @@ class NoisePolished(_Note):
 
 
 Finding = Annotated[
-    Union[ErrorAboveThreshold, ModelMismatch, NoEffect, IllConditioned, NotAtMinimum, PinnedOnBound, RendererAlters,
-          SchemeChosen, DeadParameters, JointRefined, PredictionNotRealised, NoisePolished],
+    Union[ErrorAboveThreshold, ModelMismatch, HeldOutAbove, CannotResolve, NoEffect, IllConditioned, NotAtMinimum,
+          PinnedOnBound, RendererAlters, ValidationSkipped, NothingFitted, StartKept, ChoiceTried, SchemeChosen, DeadParameters,
+          JointRefined, PredictionNotRealised, NoisePolished],
     Field(discriminator="kind"),
 ]
 
@@ -178,7 +278,8 @@ Status = Literal["ok", "mismatch", "unreliable"]
 
 class Verdict(Strict):
     """The findings, and what they add up to: ok (nothing unreliable), mismatch (only a model
-    mismatch: the closest this target model gets) or unreliable."""
+    mismatch, and the held-out lights it shows under: the closest this target model gets) or
+    unreliable."""
 
     status: Status
     findings: list[Finding] = Field(default_factory=list)
@@ -188,8 +289,9 @@ class Verdict(Strict):
         problems = [f for f in findings if f.severity == "unreliable"]
         if not problems:
             status: Status = "ok"
-        elif all(isinstance(f, ModelMismatch) for f in problems):
-            status = "mismatch"
+        elif any(isinstance(f, ModelMismatch) for f in problems) and all(
+                isinstance(f, (ModelMismatch, HeldOutAbove)) for f in problems):
+            status = "mismatch"  # the closest this model gets, under the held-out lights too
         else:
             status = "unreliable"
         return cls(status=status, findings=list(findings))

@@ -119,6 +119,7 @@ def resolve(job: Job, registry: AdapterRegistry, where: Where = Where()) -> Reso
     base.update(fixed)
     _check_fixed(tgt_spec, base, fixed, where)
     _check_sampling(job, where)
+    _check_scene(registry, job, where)
     free = tgt_spec.fittable(base, fixed=set(fixed))
     versions = {name: registry.get(name).version for name in dict.fromkeys((src.adapter, tgt.adapter))}
     canonical = job.model_copy(update={
@@ -142,6 +143,16 @@ def _check_fixed(spec: ModelSpec, base: dict[str, Value], fixed: dict[str, Value
         now = ", ".join(f"{k}={base[k]}" for k in spec.param(name).active_when)
         raise ConfigError(f"does nothing with {now}: it is used only when {cond}", file=where.target_file,
                           field=f"{where.fix_prefix}{sep}{name}")
+
+
+def _check_scene(registry: AdapterRegistry, job: Job, where: Where) -> None:
+    """Each adapter renders every light of the scene (a missing light type is found here, not mid-fit)."""
+    for name in dict.fromkeys((job.source.adapter, job.target.adapter)):
+        problem = registry.get(name).scene_problem(job.scene)
+        if problem:
+            raise ConfigError(f"adapter {name!r} cannot render the scene {job.scene.name!r}: it {problem}: use a "
+                              "scene it can render",
+                              field="--scene" if where.target_prefix.startswith("--") else "scene")
 
 
 def _check_sampling(job: Job, where: Where) -> None:

@@ -23,6 +23,12 @@ def relative_rmse(reference: np.ndarray, test: np.ndarray) -> float:
     return float(np.linalg.norm(diff) / norm)
 
 
+def beyond_noise(error: float, noise_floor: float) -> float:
+    """The part of an error the render noise does not explain: sqrt(max(0, e² - floor²)), where
+    the floor is the error two renders of one material show (independent noise adds in squares)."""
+    return float(np.sqrt(max(0.0, error**2 - noise_floor**2)))
+
+
 def _pq(y: np.ndarray) -> np.ndarray:
     m1, m2 = 2610 / 16384, 2523 / 4096 * 128
     c1, c2, c3 = 3424 / 4096, 2413 / 4096 * 32, 2392 / 4096 * 32

@@ -13,10 +13,12 @@ import numpy as np
 
 from .cache import RenderCache, render_key
 from .engine.levels import Level
+from .engine.results import Validation
 from .metrics import relative_rmse
 from .protocol import Adapter, check_image
 from .scene import ProbeScene
 from .schemas import ModelSpec, Value
+from .validation import validate
 
 
 def _round(v: Value) -> Value:
@@ -46,6 +48,8 @@ class CachedRenderer:
 
     def __call__(self, params: dict[str, Value], lobe: str | None = None, scene: ProbeScene | None = None):
         sc = scene or self.scene
+        if sc.views:  # each view rendered (and cached) alone, stacked top to bottom
+            return np.concatenate([self(params, lobe, view) for view in sc.view_scenes()], axis=0)
 
         def render():
             self.by_resolution[sc.resolution, sc.spp] += 1
@@ -56,6 +60,10 @@ class CachedRenderer:
     def many(self, items: list[tuple[dict[str, Value], str | None]], scene: ProbeScene | None = None) -> None:
         """Render the uncached ones of several requests in one batch (in parallel where the adapter can)."""
         sc = scene or self.scene
+        if sc.views:
+            for view in sc.view_scenes():
+                self.many(items, view)
+            return
         todo, seen = [], set()
         for params, lobe in items:
             key = self._key(params, lobe, sc)
@@ -93,9 +101,14 @@ class ProbeRenders:
     """`core.engine.Renders` for a source material and a target model."""
 
     def __init__(self, source: CachedRenderer, source_params: dict[str, Value], source_spec: ModelSpec,
-                 target: CachedRenderer, scene: ProbeScene):
+                 target: CachedRenderer, scene: ProbeScene, given: ProbeScene | None = None):
         self.source, self.source_params, self.source_spec = source, dict(source_params), source_spec
         self.target, self.scene = target, scene
+        self.job_scene = given if given is not None else scene
+        """The job's scene: the held-out lights take its camera, size and samples."""
+        self.other_lights = self.job_scene.with_(spp=scene.spp).cache_key() != scene.cache_key()
+        """The fit ran under other lights than the job's (`core.fitscene`): those are checked too.
+        (A fit at more samples of the same lights measured the job's scene already.)"""
         self._levels: dict[tuple[str, bool], Level] = {}
         self._noise: float | None = None
 
@@ -130,8 +143,23 @@ class ProbeRenders:
         return self._noise
 
     def target_noise(self, params: dict[str, Value]) -> float:
-        first = self.target(params)
+        first = self.target(params, scene=self.scene)
         return relative_rmse(first, self.target(params, scene=self.scene.with_(seed=self.scene.seed + 1)))
+
+    def validation(self, params: dict[str, Value]) -> Validation:
+        """Source and target under the held-out conditions (`core.validation`), through the caches."""
+
+        def problems(scene: ProbeScene) -> str | None:
+            for side in (self.source, self.target):
+                why = side.adapter.scene_problem(scene)
+                if why:
+                    return f"adapter {side.name!r} {why}"
+            return None
+
+        # Held-out lights take the job's scene (its camera, size and samples), not a fit scene made
+        # finer for a sharp source: their samples follow what the user asked for.
+        return validate(lambda sc: self.source(self.source_params, scene=sc), lambda sc: self.target(params, scene=sc),
+                        self.job_scene, problems, given=self.other_lights)
 
     def notes(self, params: dict[str, Value]) -> list[str]:
         return list(self.target.adapter.notes(self.target.model, params))

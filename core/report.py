@@ -14,16 +14,18 @@ from typing import Any
 from pydantic import Field, ValidationError, computed_field
 
 from .configio import validation_message
-from .engine.results import EngineResult, StageResult
+from .engine.results import Check, EngineResult, StageResult
 from .engine.tuning import ENGINE_VERSION
 from .errors import ConfigError
 from .findings import Finding, Status, Verdict
 from .job import Job, Resolved
+from .metrics import beyond_noise
 from .model import Strict as _Strict
 from .model import WithDerived
 from .renders import rounded
+from .scene import ProbeScene
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 """Bump whenever the fields change (an older reader refuses a field it does not know)."""
 
 
@@ -53,8 +55,11 @@ class Metrics(_Strict):
                                            "target noise, each from a second seed).")
     noise_source: float
     noise_target: float
-    threshold: float = Field(description="The error threshold the verdict used: the setting, or twice the source's "
-                                         "render noise when that is more.")
+    beyond_noise: float = Field(description="The part of relative_rmse the noise floor does not explain: "
+                                            "sqrt(max(0, error² - floor²)), what the threshold judges.")
+    threshold: float = Field(description="The threshold on beyond_noise (here and under each held-out light).")
+    start_error: float | None = Field(description="Relative RMSE of the fit's start at the scene: the result is "
+                                                  "never worse.")
     jacobian_condition: float | None = Field(description="Condition number of the final Jacobian (None: not "
                                                          "defined, fewer than two live parameters).")
 
@@ -62,6 +67,13 @@ class Metrics(_Strict):
 class Start(_Strict):
     informed: bool = Field(description="The fit started from the exporters' conversion of the source.")
     params: dict[str, Any] = Field(description="That conversion, where it was used.")
+
+
+class FitSceneRecord(_Strict):
+    why: str
+    scene: ProbeScene
+    source_noise_given: float = Field(description="The source's render noise on the job's scene.")
+    source_noise: float = Field(description="... and on this one.")
 
 
 class FileRecord(_Strict):
@@ -96,9 +108,16 @@ class Report(WithDerived):
     seconds: float
     scheme: str
     scheme_used: str
-    verdict: Status = Field(description="ok; mismatch (only a model mismatch: the closest this target model "
-                                        "gets); unreliable (see findings).")
+    verdict: Status = Field(description="ok (holds under the scene's lights and every held-out one); mismatch "
+                                        "(only a model mismatch: the closest this target model gets); unreliable "
+                                        "(see findings).")
     findings: list[Finding]
+    fit_scene: FitSceneRecord | None = Field(description="Where the fit ran when not on the job's scene (which "
+                                                          "could not resolve the source), and why; None: the job's.")
+    validation: list[Check] = Field(description="Source and target under held-out lights the fit never saw (empty "
+                                                "with --validate none).")
+    validation_skipped: dict[str, str] = Field(default_factory=dict, description="Held-out conditions not "
+                                                                                 "rendered, and why.")
     stages: list[StageResult]
     adapters: dict[str, dict[str, Any]] = Field(description="Each adapter's runtime facts (renderer version, "
                                                             "variant).")
@@ -136,7 +155,7 @@ class Report(WithDerived):
         return self.model_dump(mode="json")
 
 
-def build_report(resolved: Resolved, result: EngineResult, *, start: dict, derived: tuple[dict, dict],
+def build_report(resolved: Resolved, result: EngineResult, *, start: dict, derived: tuple[dict, dict], fit_scene,
                  source_renders: int, renders_by_resolution: dict[str, int], seconds: float,
                  adapters: dict[str, dict[str, Any]], files: list[FileRecord]) -> Report:
     """The report, in one place: ``derived`` holds the source's and the target's derived quantities."""
@@ -155,12 +174,17 @@ def build_report(resolved: Resolved, result: EngineResult, *, start: dict, deriv
         fixed=dict(resolved.fixed),
         metrics=Metrics(relative_rmse=result.relative_rmse, perceptual=result.perceptual,
                         noise_floor=result.noise_floor, noise_source=result.source_noise,
-                        noise_target=result.target_noise, threshold=result.threshold,
+                        noise_target=result.target_noise, beyond_noise=beyond_noise(result.relative_rmse,
+                                                                                    result.noise_floor),
+                        threshold=result.threshold, start_error=result.start_error,
                         jacobian_condition=_finite(result.jacobian_condition)),
         start=Start(informed=bool(start), params=rounded(start)), renders=result.renders,
         renders_by_resolution=renders_by_resolution, source_renders=source_renders, seconds=seconds,
         scheme=result.scheme, scheme_used=result.scheme_used, verdict=v.status, findings=v.findings,
-        stages=result.stages, adapters=adapters,
+        validation=result.validation.checks, validation_skipped=result.validation.skipped, stages=result.stages,
+        fit_scene=None if not fit_scene.why else FitSceneRecord(why=fit_scene.why, scene=fit_scene.scene,
+                                                                 source_noise_given=fit_scene.scene_noise,
+                                                                 source_noise=fit_scene.noise), adapters=adapters,
         host={"python": platform.python_version(), "machine": platform.machine()}, files=files)
 
 

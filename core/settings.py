@@ -25,7 +25,20 @@ class Settings(Strict):
                                 "one), or the target model's defaults.")
     precise_spp: int = Field(4, ge=1, le=64, description="A fit that ends at the render noise is polished at this "
                                                          "many times the scene's samples (1: never).")
-    threshold: float = Field(0.05, gt=0, lt=10, description="Relative RMSE above which a result is not reliable.")
+    threshold: float = Field(0.05, gt=0, lt=10, description="Relative RMSE beyond the render noise above which a "
+                                                            "result is not reliable (on the scene and each "
+                                                            "validation condition).")
+    resolve_limit: float = Field(0.10, gt=0, lt=10, description="Noise floor (the error two renders of one "
+                                                                "material show) above which a scene cannot resolve "
+                                                                "the material: its own finding, whatever the error.")
+    fit_scene: Literal["auto", "samples", "as-given"] = Field(
+        "auto", description="Where the fit runs when the scene cannot resolve the source (its render noise over 3 %, "
+                            "e.g. a highlight smaller than a pixel): auto: more samples (up to 16x), else the studio "
+                            "environment; samples: more samples only; as-given: the scene as it is.")
+    validation: Literal["held-out", "none"] = Field(
+        "held-out", description="held-out: after the fit, render source and target under held-out "
+                                                  "lights (grazing, rim, headlight, the studio environment) and "
+                                                  "judge them too; none: skip (faster, judged on the scene alone).")
     method: Literal["trf", "dogbox"] = Field("trf", description="scipy least-squares method; trf (Trust Region "
                                                                  "Reflective, bounded) is the paper's.")
     jacobian_updates: int = Field(8, ge=0, le=1000, description="Broyden updates of the Jacobian between rendered "

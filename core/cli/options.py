@@ -13,7 +13,7 @@ from ..errors import ConfigError
 from ..scene import ProbeScene, load_scene
 from ..settings import DEFAULTS, Settings
 
-_METAVARS = {"starts": "N", "coarse": "N", "precise_spp": "K", "threshold": "FRACTION", "jacobian_updates": "N"}
+_METAVARS = {"starts": "N", "coarse": "N", "precise_spp": "K", "threshold": "FRACTION", "resolve_limit": "FRACTION", "jacobian_updates": "N"}
 
 
 class Parser(argparse.ArgumentParser):
@@ -23,16 +23,19 @@ class Parser(argparse.ArgumentParser):
         self.exit(2, f"remap: error: {message} (see `{self.prog} --help`)\n")
 
 
+_FLAGS = {"validation": "--validate"}
+
+
 def flag(field: str) -> str:
-    return "--" + field.replace("_", "-")
+    return _FLAGS.get(field, "--" + field.replace("_", "-"))
 
 
 def add_settings(p: argparse.ArgumentParser) -> None:
     """One flag per `Settings` field, its help the field's description and its default shown."""
     g = p.add_argument_group("how the fit runs")
     for name, info in Settings.model_fields.items():
-        kw: dict = {"dest": f"settings_{name}", "default": None,
-                    "help": f"{info.description.rstrip('.')} (default {getattr(DEFAULTS, name)})"}
+        text = f"{info.description.rstrip('.')} (default {getattr(DEFAULTS, name)})"
+        kw: dict = {"dest": f"settings_{name}", "default": None, "help": text.replace("%", "%%")}
         choices = typing.get_args(info.annotation)
         if choices and all(isinstance(c, str) for c in choices):
             kw["choices"] = choices

@@ -93,13 +93,30 @@ def _params(params: dict, names: list[str] | None = None) -> str:
                     if names is None or k in names)
 
 
-def _print(r: "Report", folder, resumed: bool) -> None:
+def _held_out(r: Report) -> str:
+    """Each held-out condition's error, with its noise floor where that is not negligible."""
+    if not r.validation:
+        return "not checked (--validate none)" if not r.validation_skipped else "none could be rendered"
+    parts = [f"{c.label} {c.error:.1%}" + (f" (noise {c.noise_floor:.1%})" if c.noise_floor >= 0.01 else "")
+             for c in r.validation]
+    levels: dict[tuple[int, int], list[str]] = {}
+    for c in r.validation:
+        if not c.given:
+            levels.setdefault((c.resolution, c.spp), []).append(c.label)
+    where = "; ".join(f"{', '.join(v) if len(levels) > 1 else 'each'} at {res} px {spp} spp"
+                      for (res, spp), v in levels.items())
+    return ", ".join(parts) + f"   ({where}; seeds the fit never saw)"
+
+
+def _print(r: Report, folder, resumed: bool) -> None:
     m = r.metrics
     verdict = {"ok": "ok", "mismatch": "MISMATCH", "unreliable": "UNRELIABLE"}[r.verdict]
     rows = [
         ("params", _params(r.params)),
         ("relative RMSE", f"{m.relative_rmse:.2%}   (noise floor {m.noise_floor:.2%})"),
         ("perceptual", f"{m.perceptual:.2f} mean ΔE_ITP"),
+        *([("fit scene", r.fit_scene.why)] if r.fit_scene else []),
+        ("held-out", _held_out(r)),
         ("start", "the exporters' conversion: " + _params(r.start.params) if r.start.informed
                   else "the target's defaults"),
         ("renders", f"{r.renders} target ({', '.join(f'{v} at {k}' for k, v in r.renders_by_resolution.items())})"

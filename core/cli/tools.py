@@ -10,6 +10,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import ConfigError
 from . import options
 
@@ -97,11 +99,16 @@ def render(args: argparse.Namespace) -> int:
         raise ConfigError(f"model {spec.name!r} cannot render its lobes alone", field="--lobe")
     if args.lobe and spec.lobes[args.lobe].empty:
         raise ConfigError(f"model {spec.name!r} has no {args.lobe} lobe (it would render black)", field="--lobe")
+    problem = registry.get(material.adapter).scene_problem(scene)
+    if problem:
+        raise ConfigError(f"adapter {material.adapter!r} cannot render the scene {scene.name!r}: it {problem}: use a "
+                          "scene it can render", field="--scene")
     t0 = time.perf_counter()
     adapter = registry.create(material.adapter)
-    try:
-        img = check_image(adapter.render(material.model, params, scene, args.lobe), scene,
-                          f"adapter {material.adapter!r} model {material.model!r}")
+    who = f"adapter {material.adapter!r} model {material.model!r}"
+    try:  # a scene of several views: each rendered alone, stacked top to bottom
+        img = np.concatenate([check_image(adapter.render(material.model, params, view, args.lobe), view, who)
+                              for view in scene.view_scenes()])
     finally:
         adapter.close()
     try:

@@ -14,6 +14,7 @@ import numpy as np
 
 from ..scene import ProbeScene
 from ..schemas import Value
+from .results import Validation
 
 RenderFn = Callable[[dict[str, Value], "str | None"], np.ndarray]
 ProgressFn = Callable[[str, int, float], None]
@@ -34,7 +35,8 @@ class Level:
 
     @property
     def resolution(self) -> int:
-        return int(self.source.shape[0])
+        """The image width (a scene of several views stacks them vertically)."""
+        return int(self.source.shape[1])
 
     @property
     def norm(self) -> float:
@@ -64,6 +66,9 @@ class Renders(Protocol):
 
     def target_noise(self, params: dict[str, Value]) -> float:
         """The same for the target with ``params``."""
+
+    def validation(self, params: dict[str, Value]) -> Validation:
+        """Source and target with ``params`` under held-out lights the fit never saw."""
 
     def notes(self, params: dict[str, Value]) -> list[str]:
         """What the target renderer does to these values that the image cannot show (a trim)."""

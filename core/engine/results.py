@@ -43,6 +43,31 @@ class StageResult(Strict):
         return self.status in CONVERGED
 
 
+class Check(Strict):
+    """The source and the fitted target rendered under one held-out condition, at samples and
+    seeds the fit never saw (each side twice, half the samples each: their difference is the noise)."""
+
+    condition: str = Field(description="grazing, rim, headlight, environment.")
+    label: str = Field(description="The condition in a few words (grazing light, studio environment).")
+    description: str
+    spp: int = Field(description="Samples per pixel of each side's image (two renders of half as many).")
+    resolution: int = Field(description="Image width, pixels.")
+    error: float = Field(description="Relative RMSE of the target against the source.")
+    perceptual: float = Field(description="Mean ΔE_ITP over the lit pixels.")
+    noise_floor: float = Field(description="The error two renders of one material would show here.")
+    beyond_noise: float = Field(description="The error the noise does not explain: sqrt(error² - floor²).")
+    given: bool = Field(False, description="The job's own scene at its own samples (the fit ran on another), not "
+                                           "a held-out light.")
+
+
+@dataclass
+class Validation:
+    """What the held-out conditions showed, and those that could not be rendered (condition: why)."""
+
+    checks: list[Check] = field(default_factory=list)
+    skipped: dict[str, str] = field(default_factory=dict)
+
+
 @dataclass
 class EngineResult:
     """A remap as the engine saw it. ``params`` is the complete target parameter set."""
@@ -54,7 +79,7 @@ class EngineResult:
     relative_rmse: float
     perceptual: float
     threshold: float
-    """The error threshold the verdict used (the setting, or more where the render noise demands)."""
+    """The error threshold the verdict used, on the error beyond the render noise."""
     source_noise: float
     target_noise: float
     renders: int
@@ -63,6 +88,9 @@ class EngineResult:
     target_image: np.ndarray
     stages: list[StageResult] = field(default_factory=list)
     jacobian_condition: float | None = None
+    validation: Validation = field(default_factory=Validation)
+    start_error: float | None = None
+    """The informed start's error at the scene (the result is never worse)."""
 
     @property
     def noise_floor(self) -> float:

@@ -5,13 +5,14 @@ at the final parameters. The optimiser only ever calls ``render(params, lobe) ->
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import OptimisationError
-from ..findings import JointRefined, NoisePolished, PredictionNotRealised
+from ..findings import ChoiceTried, JointRefined, NoisePolished, PredictionNotRealised, StartKept
 from ..metrics import delta_e_itp, relative_rmse
 from ..schemas import ModelSpec, Value
 from ..settings import Settings
@@ -19,7 +20,7 @@ from .assess import Assessment, assess
 from .levels import Level, ProgressFn, Renders
 from .plan import Plan, PlannedStage, plan_stages
 from .residuals import Tally
-from .results import EngineResult, StageResult
+from .results import EngineResult, StageResult, Validation
 from .settled import Settled, settled
 from .space import ParamSpace
 from .stage import Stage, StageConfig
@@ -95,18 +96,21 @@ class _State:
 
 def remap(target: ModelSpec, base: dict[str, Value], free: list[str], renders: Renders,
           settings: Settings = Settings(), tuning: Tuning = Tuning(),
-          progress: ProgressFn | None = None) -> EngineResult:
+          progress: ProgressFn | None = None, alternatives: list[dict[str, Value]] = ()) -> EngineResult:
     """Fit ``free`` parameters of ``target`` (the others as in ``base``) so that the target's render
-    matches the source's, both as ``renders`` gives them at its scene."""
+    matches the source's, both as ``renders`` gives them at its scene. ``alternatives``: values of
+    discrete choices to try first (each fitted briefly, the best kept)."""
     t0 = time.perf_counter()
     run = _setup(target, free, renders, settings, tuning, progress)
+    base = _choose(run, dict(base), list(alternatives))
     plan = plan_stages(settings.scheme, target, free, run.scene.source_lobes)
     run.notes += plan.findings
-    state = _fit_stages(run, plan, dict(base))
+    start = _State(dict(base), *run.render_final(dict(base)))
+    state = _never_worse(run, start, _fit_stages(run, plan, dict(base)))
     assessment = run.assess(state)
     state, assessment, joint = _refine_jointly(run, plan, state, assessment)
     state, assessment = _polish_noise_limited(run, state, assessment)
-    return _conclude(run, plan, state, assessment, joint, t0)
+    return _conclude(run, plan, state, assessment, joint, t0, start.err)
 
 
 def _setup(target: ModelSpec, free: list[str], renders: Renders, settings: Settings, tuning: Tuning,
@@ -119,15 +123,39 @@ def _setup(target: ModelSpec, free: list[str], renders: Renders, settings: Setti
     _check_source(full.source)
     noise = renders.source_noise()
     coarse = polish = None
-    if settings.coarse and 2 * settings.coarse <= scene.resolution:
-        coarse = renders.level(scene.with_(resolution=settings.coarse))
+    size = coarse_size(full, settings.coarse, tuning.min_highlight_px)
+    if size and 2 * size <= scene.resolution:
+        coarse = renders.level(scene.with_(resolution=size))
         p = tuning.polish_resolution
         if p and 2 * p <= scene.resolution:
             polish = renders.level(scene.with_(resolution=p))
     return _Run(target, list(free), renders, settings, tuning, progress, full, coarse, polish or full,
                 "" if polish is None else f"@{polish.resolution}px", noise,
-                threshold=max(settings.threshold, tuning.noise_threshold_factor * noise),
+                threshold=settings.threshold,
                 good_enough=max(0.0, noise * tuning.noise_stop_fraction))
+
+
+def highlight_pixels(image: np.ndarray) -> float:
+    """How many pixels the brightest half of an image's light covers: a few for a sharp highlight
+    under a point light, thousands for a diffuse sphere."""
+    lum = np.sort((np.asarray(image, np.float64) @ np.array([0.2126, 0.7152, 0.0722])).ravel())[::-1]
+    total = lum.sum()
+    if total <= 0:
+        return float(lum.size)
+    return float(np.searchsorted(np.cumsum(lum), 0.5 * total) + 1)
+
+
+def coarse_size(full: Level, wanted: int, min_px: float) -> int:
+    """The coarse level's width: the setting, raised until the source's highlight (its specular
+    lobe where it has one) covers ``min_px`` pixels there; 0 for none."""
+    if not wanted:
+        return 0
+    spec = full.source_lobes.get("specular")
+    image = spec if spec is not None and float(np.max(spec)) > 0 else full.source
+    px = highlight_pixels(image) * (wanted / full.resolution) ** 2
+    if px >= min_px:
+        return wanted
+    return int(8 * math.ceil(wanted * math.sqrt(min_px / max(px, 1e-9)) / 8))
 
 
 def _check_source(source: np.ndarray) -> None:
@@ -167,6 +195,37 @@ def _fit_stages(run: _Run, plan: Plan, params: dict[str, Value]) -> _State:
         last, held = stage, settle
     image, err = run.render_final(params)
     return _State(params, image, err, last, held)
+
+
+def _choose(run: _Run, base: dict[str, Value], alternatives: list[dict[str, Value]]) -> dict[str, Value]:
+    """Each alternative's choices with every free parameter fitted briefly, at the coarse level (the
+    scene's without one): the base with the best of them."""
+    if len(alternatives) < 2 or not run.free:
+        return base
+    level, t = run.coarse or run.fine, run.tuning
+    errors: dict[str, float] = {}
+    for alt in alternatives:
+        label = " ".join(f"{k}={v}" for k, v in alt.items())
+        params = {**base, **alt}
+        space = ParamSpace(run.target, params, run.free)
+        config = run.fresh(f"try {label}@{level.resolution}px", None, ftol=t.coarse_tol, xtol=t.coarse_tol, starts=1,
+                           budget=t.choice_budget)
+        stage = run.stage(config, space, level, None)
+        stage.run(space.encode(params))
+        errors[label] = stage.result.error
+        run.stages.append(stage.result.model_copy(update={"kept": False}))
+    best = min(range(len(alternatives)), key=lambda i: list(errors.values())[i])
+    run.notes.append(ChoiceTried(errors=errors, chosen=list(errors)[best], resolution=level.resolution))
+    return {**base, **alternatives[best]}
+
+
+def _never_worse(run: _Run, start: _State, fitted: _State) -> _State:
+    """The fit's result, unless the start it began from is better at the scene's resolution and
+    samples (a coarse level that cannot see a sharp highlight "converges" away from it)."""
+    if not run.free or fitted.err <= start.err:
+        return fitted
+    run.notes.append(StartKept(start_error=start.err, fitted_error=fitted.err))
+    return start
 
 
 def _coarse_fit(run: _Run, planned: PlannedStage, space: ParamSpace,
@@ -224,11 +283,16 @@ def _refine_jointly(run: _Run, plan: Plan, state: _State, assessment: Assessment
     return state, assessment, _Joint(rounds, err0, state.err, predicted0 or 0.0)
 
 
+PRECISE_SLACK = 0.05
+"""How much a noise polish may raise the scene-level error (relative) and be kept."""
+
+
 def _polish_noise_limited(run: _Run, state: _State, assessment: Assessment) -> tuple[_State, Assessment]:
     """The fit ended within a few times the render noise: what is left is noise, which more
     samples shrink where more iterations cannot (the target's noise biases a fitted reflectance
     low). One short polish of every free parameter, source and target at `precise_spp` times the
-    samples, kept if it lowers the error there; the error reported stays the scene's."""
+    samples, kept if it lowers the error there and does not raise the error at the scene's samples
+    (the error reported) by more than `PRECISE_SLACK`: at the noise those two differ by noise alone."""
     k, scene = run.settings.precise_spp, run.renders.scene
     if k <= 1 or not run.free or not state.err < run.tuning.precise_below * run.source_noise:
         return state, assessment
@@ -238,11 +302,11 @@ def _polish_noise_limited(run: _Run, state: _State, assessment: Assessment) -> t
                        start_margin=0.0, good_enough=0.0, budget_converges=True, origin="the fit")
     stage = run.stage(config, space, level, None)
     params = space.decode(stage.run(space.encode(state.params)))
-    kept = stage.result.error < stage.result.start_error
+    image, err = run.render_final(params) if stage.result.error < stage.result.start_error else (None, state.err)
+    kept = image is not None and err <= state.err * (1 + PRECISE_SLACK)
     run.stages.append(stage.result.model_copy(update={"kept": kept}))
     if not kept:
         return state, assessment
-    image, err = run.render_final(params)
     run.notes.append(NoisePolished(error=state.err, source_noise=run.source_noise, factor=run.tuning.precise_below,
                                    spp=scene.spp * k, before=stage.result.start_error, after=stage.result.error))
     state = _State(params, image, err, stage)
@@ -251,19 +315,24 @@ def _polish_noise_limited(run: _Run, state: _State, assessment: Assessment) -> t
     return state, run.assess(state, level)
 
 
-def _conclude(run: _Run, plan: Plan, state: _State, assessment: Assessment, joint: _Joint, t0: float) -> EngineResult:
+def _conclude(run: _Run, plan: Plan, state: _State, assessment: Assessment, joint: _Joint, t0: float,
+              start_error: float) -> EngineResult:
     trust = joint.realised(assessment.predicted)
     if not trust:
         run.notes.append(PredictionNotRealised(predicted_now=assessment.predicted, rounds=joint.rounds,
                                                before=joint.before, after=joint.after,
                                                predicted_first=joint.predicted))
     target_noise = run.renders.target_noise(state.params)
-    evidence = Evidence(error=state.err, threshold=run.threshold, assessment=assessment, stages=run.stages,
+    validation = run.renders.validation(state.params) if run.settings.validation == "held-out" else Validation()
+    floor = float(np.hypot(run.source_noise, target_noise) / np.sqrt(2))
+    evidence = Evidence(error=state.err, noise_floor=floor, threshold=run.threshold,
+                        resolve_limit=run.settings.resolve_limit, assessment=assessment, stages=run.stages,
                         cond_limit=run.tuning.cond_limit, renderer_notes=run.renders.notes(state.params),
-                        trust_prediction=trust)
+                        fitted=bool(run.free), trust_prediction=trust, validation=validation)
     return EngineResult(
         params=state.params, fitted=list(run.free), scheme=run.settings.scheme, scheme_used=plan.scheme,
         relative_rmse=state.err, perceptual=delta_e_itp(run.scene.source, state.image), threshold=run.threshold,
         source_noise=run.source_noise, target_noise=target_noise, renders=run.renders.target_renders(),
         seconds=time.perf_counter() - t0, verdict=judge(evidence, run.notes), target_image=state.image,
-        stages=list(run.stages), jacobian_condition=assessment.condition)
+        stages=list(run.stages), jacobian_condition=assessment.condition, validation=validation,
+        start_error=start_error)

@@ -65,5 +65,11 @@ class ParamSpace:
         """Renders one forward-difference Jacobian costs (one per separable RGB parameter)."""
         return self.dim - 2 * len(self.separable_groups()) if separable else self.dim
 
+    def typical_unit(self, index: int) -> tuple[float, float]:
+        """The normalised range of the typical values (`ParamSpec.typical`) of the scalar at ``index``."""
+        name = next(n for n, sl in self.slices.items() if sl.start == index)
+        typical = self.spec.param(name).typical
+        return (0.0, 1.0) if typical is None else (self._to_unit(name, typical[0]), self._to_unit(name, typical[1]))
+
     def scalar_indices(self) -> list[int]:
         return [sl.start for name, sl in self.slices.items() if self.spec.param(name).kind == "scalar"]

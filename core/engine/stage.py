@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass
 from typing import Literal
@@ -50,7 +49,7 @@ class Stage:
     def __init__(self, config: StageConfig, space: ParamSpace, render: RenderFn, source: np.ndarray, norm: float,
                  tuning: Tuning, tally: Tally, progress: ProgressFn | None = None):
         self.config, self.space = config, space
-        self.resolution = int(math.isqrt(np.asarray(source).size // 3))
+        self.resolution = int(np.asarray(source).shape[1])  # the width: views stack vertically
         self.residuals = Residuals(config.name, config.lobe, space, render, source, norm, budget=config.budget,
                                    extend_while_gaining=config.extend_while_gaining,
                                    good_enough=config.good_enough, tally=tally, progress=progress)
@@ -141,7 +140,8 @@ class Stage:
         for i in range(1, self.config.starts):
             u = out[0].copy()
             for d, j in enumerate(idx):
-                u[j] = 0.1 + 0.8 * _van_der_corput(i, primes[d % len(primes)])
+                lo, hi = self.space.typical_unit(j)
+                u[j] = lo + (hi - lo) * (0.1 + 0.8 * _van_der_corput(i, primes[d % len(primes)]))
             out.append(u)
         return out
 

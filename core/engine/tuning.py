@@ -7,7 +7,7 @@ from pydantic import Field
 
 from ..model import Strict
 
-ENGINE_VERSION = 2
+ENGINE_VERSION = 3
 """Bump whenever a change in core/ would change a result: the engine, but also the informed start
 (execute.py, appearance.py), the renders' cache and rounding (renders.py) or the metrics. A stored
 result is reused (a resumed sweep, a library rerun) only when its job key, which includes this
@@ -21,6 +21,9 @@ class Tuning(Strict):
     polish_resolution: int | None = Field(
         None, ge=8, description="Resolution where each stage is polished and the verdict taken, when the scene's is "
                                 "at least twice it and there is a coarse level (None: the scene's own).")
+    min_highlight_px: float = Field(2.0, ge=0, description="The coarse level is made finer (or left out) until the "
+                                                            "brightest half of the source's highlight covers this "
+                                                            "many of its pixels.")
     coarse_tol: float = Field(1e-2, gt=0, description="ftol and xtol of the coarse level.")
     start_margin: float = Field(0.05, ge=0, lt=0.5, description="A fresh fit's start that lies on a bound is moved "
                                                                  "this far inside it (normalised units).")
@@ -36,6 +39,8 @@ class Tuning(Strict):
                                                  "pinned on a bound its gradient pushes against, or inert there.")
     precise_below: float = Field(3.0, gt=0, description="A fit ending within this many times the source's render "
                                                         "noise gets the polish at `Settings.precise_spp` samples.")
+    choice_budget: int = Field(30, ge=1, le=100_000, description="Renders of the brief fit each value of an open "
+                                                                 "discrete choice gets (the best is kept).")
     max_renders_per_stage: int = Field(80, ge=1, le=100_000, description="Render budget of one fresh stage.")
     ftol: float = Field(1e-4, gt=0, description="Least-squares ftol (relative cost change that stops a fit).")
     xtol: float = Field(1e-4, gt=0, description="Least-squares xtol (relative step that stops a fit).")
@@ -44,7 +49,5 @@ class Tuning(Strict):
                                                    "Gauss-Newton step predicts a gain.")
     joint_min_gain: float = Field(0.002, ge=0, description="... a gain of at least 15 % of the error and this much "
                                                            "relative RMSE.")
-    noise_threshold_factor: float = Field(2.0, ge=0, description="The error threshold is at least this many times the "
-                                                                  "source's render noise.")
     noise_stop_fraction: float = Field(1 / 3, ge=0, description="A fit stops once its error falls to this "
                                                                 "fraction of the source's render noise.")

@@ -1,22 +1,34 @@
-"""The verdict: findings from the final parameters, the final renders and their assessment."""
+"""The verdict: findings from the final parameters, the final renders, their assessment and the
+held-out validation. Errors are judged by the part the render noise does not explain, against a
+fixed threshold; a noise floor over the resolve limit is its own finding (nothing is judged there)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from ..findings import (
+    CannotResolve,
     DeadParameters,
     ErrorAboveThreshold,
+    HeldOutAbove,
+    HeldOutError,
     IllConditioned,
     ModelMismatch,
     NoEffect,
     NotAtMinimum,
+    NothingFitted,
     PinnedOnBound,
     RendererAlters,
+    ValidationSkipped,
     Verdict,
 )
+from ..metrics import beyond_noise
 from .assess import Assessment
-from .results import StageResult
+from .results import StageResult, Validation
+
+SCENE_ADVICE = ("render more samples (--spp), or fit under an environment (a scene whose lights include "
+                "{type: environment}), which resolves sharp highlights a point light leaves sub-pixel")
+HELD_OUT_ADVICE = "raise the scene's samples (the validation renders take 4x them, at least 64)"
 
 
 @dataclass(frozen=True)
@@ -24,31 +36,75 @@ class Evidence:
     """Everything the verdict is taken on, all of it at the final parameters."""
 
     error: float
+    noise_floor: float
     threshold: float
+    resolve_limit: float
     assessment: Assessment
     stages: list[StageResult]
     cond_limit: float
     renderer_notes: list[str]
+    fitted: bool = True
+    """False when every parameter was held: a comparison, with no fit to judge."""
     trust_prediction: bool = True
     """False when joint rounds already failed to realise what a joint step predicts."""
+    validation: Validation = field(default_factory=Validation)
+
+    @property
+    def beyond_noise(self) -> float:
+        return beyond_noise(self.error, self.noise_floor)
+
+
+def _errors(ev: Evidence) -> list:
+    """The fit scene's error and each held-out condition's, judged beyond the noise. Where the noise
+    floor is over the limit nothing is judged: a finding that says so, a note while another
+    condition resolves the material (the verdict rests on those), else unreliable."""
+    resolved = (ev.noise_floor <= ev.resolve_limit) + sum(c.noise_floor <= ev.resolve_limit
+                                                          for c in ev.validation.checks)
+    out: list = []
+    if ev.noise_floor > ev.resolve_limit:
+        out.append(CannotResolve(condition="scene", label="the scene", noise_floor=ev.noise_floor,
+                                 limit=ev.resolve_limit, advice=SCENE_ADVICE, elsewhere=resolved > 0))
+    elif ev.beyond_noise > ev.threshold:
+        out.append(ErrorAboveThreshold(error=ev.error, threshold=ev.threshold, beyond_noise=ev.beyond_noise))
+    above = []
+    for c in ev.validation.checks:
+        if c.noise_floor > ev.resolve_limit:
+            out.append(CannotResolve(condition=c.condition, label=f"the {c.label}", noise_floor=c.noise_floor,
+                                     limit=ev.resolve_limit, advice=HELD_OUT_ADVICE, elsewhere=resolved > 0))
+        elif c.beyond_noise > ev.threshold:
+            above.append(HeldOutError(condition=c.condition, label=c.label, error=c.error,
+                                      beyond_noise=c.beyond_noise))
+    if above:
+        out.append(HeldOutAbove(conditions=above, threshold=ev.threshold))
+    return out
+
+
+def _fit_problems(ev: Evidence) -> list:
+    a = ev.assessment
+    out: list = []
+    if a.no_effect:
+        out.append(NoEffect())
+    if a.condition is not None and a.condition > ev.cond_limit:
+        out.append(IllConditioned(condition=a.condition))
+    if a.predicted is not None and ev.trust_prediction:
+        out.append(NotAtMinimum(predicted=a.predicted))
+    out += [PinnedOnBound(parameter=p.parameter, side=p.side, error_without=p.error_without) for p in a.pins]
+    return out
 
 
 def judge(ev: Evidence, notes: list) -> Verdict:
-    """The findings in order of weight, then ``notes`` (what the schedule did) and the dead parameters."""
-    a = ev.assessment
-    problems: list = []
-    if ev.error > ev.threshold:
-        problems.append(ErrorAboveThreshold(error=ev.error, threshold=ev.threshold))
-    if a.no_effect:
-        problems.append(NoEffect())
-    if a.condition is not None and a.condition > ev.cond_limit:
-        problems.append(IllConditioned(condition=a.condition))
-    if a.predicted is not None and ev.trust_prediction:
-        problems.append(NotAtMinimum(predicted=a.predicted))
-    problems += [PinnedOnBound(parameter=p.parameter, side=p.side, error_without=p.error_without) for p in a.pins]
-    if (len(problems) == 1 and isinstance(problems[0], ErrorAboveThreshold)
-            and all(s.converged for s in ev.stages)):
-        problems = [ModelMismatch(error=ev.error, threshold=ev.threshold)]
-    problems += [RendererAlters(detail=n) for n in ev.renderer_notes]
-    extra = [DeadParameters(parameters=list(a.dead))] if a.dead and not a.no_effect else []
+    """The findings in order of weight, then ``notes`` (what the schedule did) and the dead parameters.
+    With nothing fitted there is no fit to question: only the errors, and no talk of a mismatch."""
+    errors = _errors(ev)
+    fit = _fit_problems(ev) if ev.fitted else []
+    scene = [p for p in errors if isinstance(p, ErrorAboveThreshold)]
+    if ev.fitted and scene and not fit and all(s.converged for s in ev.stages):
+        errors = [ModelMismatch(error=ev.error, threshold=ev.threshold, beyond_noise=ev.beyond_noise)
+                  if p is scene[0] else p for p in errors]
+    problems = errors + fit + [RendererAlters(detail=n) for n in ev.renderer_notes]
+    extra: list = [ValidationSkipped(condition=k, why=v) for k, v in ev.validation.skipped.items()]
+    if not ev.fitted:
+        extra.append(NothingFitted())
+    elif ev.assessment.dead and not ev.assessment.no_effect:
+        extra.append(DeadParameters(parameters=list(ev.assessment.dead)))
     return Verdict.of(problems + list(notes) + extra)

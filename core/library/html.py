@@ -36,6 +36,9 @@ def _card(item: "Item") -> dict:
             "fitted": rep.fitted, "error": m.relative_rmse, "perceptual": m.perceptual, "noise": m.noise_floor,
             "threshold": m.threshold, "renders": rep.renders, "seconds": rep.seconds, "resumed": item.done.resumed,
             "findings": [{"severity": f.severity, "message": f.message} for f in rep.findings],
+            "held_out": [{"label": c.label, "error": c.error, "noise": c.noise_floor, "beyond": c.beyond_noise,
+                          "judged": c.noise_floor <= rep.job.settings.resolve_limit} for c in rep.validation],
+            "fit_scene": rep.fit_scene.why if rep.fit_scene else "",
             "target": f"{rep.target.adapter}:{rep.target.model}"}
     return card
 

@@ -34,7 +34,7 @@ def test_a_mitsuba_scene_of_mixed_bsdfs_converts_to_one_blend_and_a_report(tmp_p
     assert {n for n, (st, _) in status.items() if st == "unsupported"} == {"glass", "mix"}
     # A near-mirror (alpha 0.002) shows no highlight at 32 px: the probe sees nothing to match.
     assert status["smooth silver"][0] == "failed" and "image is black" in status["smooth silver"][1]
-    assert {m["name"]: m["model"] for m in s["materials"]}["gold"] == "glossy"  # a metal: the Glossy BSDF
+    assert {m["name"]: m["model"] for m in s["materials"]}["gold"] == "metallic"  # a metal: the Metallic BSDF
     # The .blend holds every converted material under its source's name.
     converted = {m["name"] for m in s["materials"] if m["slot"]}
     in_blend = {e.name: e for e in BlendReader().read(out / "library.blend")}

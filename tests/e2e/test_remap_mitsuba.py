@@ -40,7 +40,7 @@ def test_gold_beckmann_to_ggx_writes_the_contract(tmp_path, root, mitsuba_adapte
 
 def test_identity_ggx_recovers_alpha_within_one_percent(tmp_path, root, mitsuba_adapter):
     _, r = _run(tmp_path, root, "aluminium-ggx.yaml", "--adapter", "mitsuba", "--model", "roughconductor",
-                "--start", "defaults")
+                "--start", "defaults", "--validate", "none")  # the fit's renders alone: no held-out ones
     assert r["start"] == {"informed": False, "params": {}}
     assert abs(r["params"]["alpha"] / 0.3 - 1) < 0.01
     assert r["metrics"]["relative_rmse"] <= r["metrics"]["noise_floor"]
@@ -48,7 +48,7 @@ def test_identity_ggx_recovers_alpha_within_one_percent(tmp_path, root, mitsuba_
     assert r["reliable"] is True
     # From the informed start (the same model: the source's own α) it only has to confirm it.
     _, informed = _run(tmp_path / "informed", root, "aluminium-ggx.yaml", "--adapter", "mitsuba",
-                       "--model", "roughconductor")
+                       "--model", "roughconductor", "--validate", "none")
     assert informed["start"] == {"informed": True, "params": {"alpha": 0.3}}
     assert informed["metrics"]["relative_rmse"] <= informed["metrics"]["noise_floor"]
     assert informed["renders"] < r["renders"] / 2 and informed["reliable"] is True
@@ -85,7 +85,7 @@ def test_a_two_stage_result_off_the_full_image_minimum_is_refined_jointly(tmp_pa
 def test_cross_model_plastic_to_principled(tmp_path, root, mitsuba_adapter):
     _, r = _run(tmp_path, root, "blue-plastic.yaml", "--adapter", "mitsuba", "--model", "principled",
                 "--resolution", "64")
-    assert r["scheme_used"] == "one" and "declares no lobes" in r["notes"][0]
+    assert r["scheme_used"] == "one" and any("declares no lobes" in n for n in r["notes"])
     assert r["metrics"]["relative_rmse"] < 0.25
     b = r["params"]["base_color"]
     assert b[2] > b[1] > b[0]  # still blue
@@ -109,12 +109,14 @@ def test_joint_rounds_that_do_not_realise_the_predicted_gain_leave_a_note_not_a_
     from brdfremap.core.job import Job, Target, resolve
     from brdfremap.core.plugins import collect_adapters
     from brdfremap.core.schemas import Material
+    from brdfremap.core.engine import Tuning
     from brdfremap.core.settings import Settings
 
     reg = collect_adapters()
     src = Material(adapter="mitsuba", model="ashikhmin_shirley", params={"material": "AlSb", "alpha": 0.05})
     job = Job(source=src, target=Target(adapter="mitsuba", model="ward", fix={"diffuse_reflectance": 0.0}),
-              settings=Settings(jacobian_updates=0, start="defaults"))
+              settings=Settings(jacobian_updates=0, start="defaults", validation="none"),  # the probe's verdict
+              tuning=Tuning(min_highlight_px=0))  # the 32 px coarse level the case was measured with
     pool = AdapterPool(reg)
     pool.open["mitsuba"] = mitsuba_adapter  # the session's adapter: not closed here
     r = execute(resolve(job, reg), pool).report
@@ -133,9 +135,12 @@ def test_the_same_job_into_the_same_folder_is_reused_and_force_fits_again(tmp_pa
     _, forced = _run(tmp_path, root, "gold.yaml", *args, "--force")
     assert forced["params"] == first["params"] and forced["seconds"] != first["seconds"]
     # Another job into the folder replaces the result, and the files it does not have go.
+    import hashlib
+
     (out / "material.blend").write_bytes(b"from an earlier Cycles result")
     doc = read_result(out / "result.json")
-    doc["files"].append({"name": "material.blend", "sha256": "0" * 64, "bytes": 29})
+    doc["files"].append({"name": "material.blend", "sha256": hashlib.sha256(b"from an earlier Cycles result")
+                         .hexdigest(), "bytes": 29})  # what brdf-remap wrote (a file it did not is never removed)
     (out / "result.json").write_text(json.dumps(doc))
     _, other = _run(tmp_path, root, "gold.yaml", *args[:-1], "48")
     assert other["key"] != first["key"] and not (out / "material.blend").exists()

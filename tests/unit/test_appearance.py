@@ -40,9 +40,11 @@ def test_mitsuba_gold_reads_as_a_conductor_and_writes_principled_by_the_exporter
     assert look.specular == pytest.approx(conductor_f0(*GOLD))
     out = cycles.from_appearance("principled", look, CYCLES["principled"].complete({}))
     assert out == {"roughness": pytest.approx(math.sqrt(0.1)), "base_color": look.specular, "metallic": 1.0}
-    # Cycles' own conductor takes the complex IOR itself.
+    # Cycles' own conductor takes the complex IOR itself, and the source's Beckmann (Principled has none:
+    # the fit tries its two GGX kinds, see test_an_open_distribution_is_tried_each_way).
     assert cycles.from_appearance("metallic", look, {}) == {"roughness": pytest.approx(math.sqrt(0.1)),
-                                                           "ior": GOLD[0], "extinction": GOLD[1]}
+                                                           "ior": GOLD[0], "extinction": GOLD[1],
+                                                           "distribution": "beckmann"}
 
 
 def test_a_plastic_keeps_its_reflectance_through_specular_ior_level():

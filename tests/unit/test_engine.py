@@ -108,8 +108,9 @@ def test_no_parameter_changing_the_image_is_unreliable():
 def test_model_mismatch_is_named_as_such():
     # Fit only the specular lobe to an image that also has a strong diffuse term.
     res, _, _ = _remap(TOY.complete({"diffuse": 0.0}), ["specular", "alpha"], ONE)
-    assert res.verdict.status == "mismatch"
-    assert [f.kind for f in res.verdict.problems] == ["model_mismatch"]
+    assert res.verdict.status == "mismatch"  # the closest the model gets, under the held-out lights too
+    kinds = [f.kind for f in res.verdict.problems]
+    assert kinds[0] == "model_mismatch" and set(kinds[1:]) <= {"held_out_above"}
     assert "above the 5% threshold" in res.verdict.reason
 
 
@@ -185,7 +186,7 @@ def test_auto_scheme_splits_only_lobes_that_divide_the_parameters():
 
 def test_coarse_to_fine_does_most_renders_at_low_resolution():
     base = TOY.complete({})
-    res, _, _ = _remap(base, TOY.fittable(base), Settings(coarse=16))
+    res, _, _ = _remap(base, TOY.fittable(base), Settings(coarse=16), Tuning(min_highlight_px=0))  # 16 px as set
     coarse = [s for s in res.stages if s.resolution == 16]
     fine = [s for s in res.stages if s.resolution == 48]
     assert coarse and sum(s.renders for s in coarse) > sum(s.renders for s in fine)
@@ -272,9 +273,10 @@ def test_a_retried_step_gets_a_fresh_jacobian():
 
 def test_the_verdict_reuses_the_last_stage_jacobian_when_updates_are_on():
     base = TOY.complete({})
-    out = {n: _remap(base, TOY.fittable(base), Settings(scheme="one", jacobian_updates=n))[0] for n in (0, 8)}
-    for n in (0, 8):  # the stage's renders and the target's second seed: no Jacobian more (the final
-        assert out[n].renders == sum(s.renders for s in out[n].stages) + 1  # image is the stage's best point)
+    out = {n: _remap(base, TOY.fittable(base), Settings(scheme="one", jacobian_updates=n, validation="none"))[0]
+           for n in (0, 8)}
+    for n in (0, 8):  # the stage's renders (its first is the start's, at the scene) and the target's second
+        assert out[n].renders == sum(s.renders for s in out[n].stages) + 1  # seed: no Jacobian more
     assert out[8].jacobian_condition is not None and out[8].verdict.reliable
 
 

@@ -64,8 +64,10 @@ def test_settings_defaults_exist_once_and_the_cli_reads_them(capsys):
     with pytest.raises(SystemExit):
         main(["--help"])
     help_text = capsys.readouterr().out
+    from brdfremap.core.cli.options import flag
+
     for name, info in Settings.model_fields.items():
-        assert f"--{name.replace('_', '-')}" in help_text
+        assert flag(name) in help_text
         assert f"(default {getattr(DEFAULTS, name)})" in " ".join(help_text.split())
     with pytest.raises(Exception, match="extra"):
         Settings(schme="one")
@@ -102,12 +104,17 @@ def test_the_store_keeps_a_result_whole_and_finds_it_by_key(tmp_path):
     store.save("a", out)
     assert store.find("a", out.report.key).document() == out.report.document()
     assert store.find("a", "another key") is None
+    import hashlib
+
     (tmp_path / "s/a/stale.txt").write_text("from an older result")
+    (tmp_path / "s/a/notes.txt").write_text("the user's, listed by a forged record")
     doc = json.loads((tmp_path / "s/a/result.json").read_text())
+    sha = hashlib.sha256(b"from an older result").hexdigest()
     (tmp_path / "s/a/result.json").write_text(json.dumps({**doc, "files": doc["files"] + [
-        {"name": "stale.txt", "sha256": "0" * 64, "bytes": 20}]}))
-    store.save("a", out)  # a file the previous result listed and this one has not is removed
+        {"name": "stale.txt", "sha256": sha, "bytes": 20}, {"name": "notes.txt", "sha256": "0" * 64, "bytes": 37}]}))
+    store.save("a", out)  # a file the previous result wrote (its hash) and this one has not is removed
     assert not (tmp_path / "s/a/stale.txt").exists()
+    assert (tmp_path / "s/a/notes.txt").exists()  # not what it wrote: never removed
     (tmp_path / "s/a/target.exr").write_bytes(b"x")
     stored = store.inspect("a")
     assert stored.report is None and "target.exr is missing or does not match" in stored.problem

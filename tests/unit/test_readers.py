@@ -28,7 +28,7 @@ def test_every_bsdf_of_a_mitsuba_scene_is_read_as_mitsuba_reads_it(formats):
     assert got["tinted mirror"].material.params["eta"] == (0.0, 0.0, 0.0)
     assert got["green plastic"].material.params["int_ior"] == 1.49  # "acrylic glass"
     assert "twosided" in got["green plastic"].notes[0]
-    assert got["glossy white"].material.params["alpha"] == 0.002 and "smooth plastic" in got["glossy white"].notes[0]
+    assert got["glossy white"].material.params["alpha"] == 1e-4 and "smooth plastic" in got["glossy white"].notes[0]
     assert got["glossy white"].material.params["diffuse_reflectance"] == (0.7, 0.7, 0.7)  # a uniform spectrum
     assert got["wood"].textured == ["reflectance <- bitmap 'textures/wood.png'"]
     assert "isotropic alpha 0.1225" in got["brushed steel"].notes[0]

@@ -1,0 +1,82 @@
+"""The scene a fit runs on: the job's scene, unless it cannot resolve the source.
+
+A sharp highlight under a point light covers a fraction of a pixel: a few of the scene's samples
+land on it, so two renders of the source differ by tens of percent and no fit can tell a match
+from a mismatch. The source's own render noise says so before any fit. Then, in order:
+
+1. more samples, while the noise they predict (noise ∝ 1/√spp) reaches `GOAL` within
+   `MAX_SPP_FACTOR` times the scene's samples;
+2. else the studio environment (`core.environment`) instead of the scene's lights, where both
+   adapters render one: a near-mirror reflects its whole surroundings, which a point light
+   reduces to one sub-pixel spot (bench/validation.py measures both);
+3. else the scene as it is (the verdict then says it cannot resolve the material).
+
+Each candidate is measured (two source renders) before it is taken."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from .metrics import relative_rmse
+from .scene import MAX_SPP, EnvironmentLight, ProbeScene
+
+GOAL = 0.03
+"""The source noise (relative RMSE between two seeds) a fit scene should reach."""
+MAX_SPP_FACTOR = 16
+
+
+@dataclass(frozen=True)
+class FitScene:
+    scene: ProbeScene
+    why: str = ""
+    """Empty when it is the job's scene; else why the fit runs elsewhere, in words."""
+    noise: float = 0.0
+    """The source's noise there (relative RMSE between two seeds)."""
+    scene_noise: float = 0.0
+    """The source's noise on the job's scene."""
+
+
+def source_noise(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene) -> float:
+    return relative_rmse(render(scene), render(scene.with_(seed=scene.seed + 1)))
+
+
+def _samples_for(noise: float, spp: int) -> int:
+    """The samples per pixel (a power of two) that bring this noise at ``spp`` down to GOAL."""
+    need = spp * (noise / GOAL) ** 2
+    return min(MAX_SPP, 2 ** math.ceil(math.log2(max(need, spp + 1))))
+
+
+def choose(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, environment_ok: bool,
+           limit: float, policy: str = "auto") -> FitScene:
+    """The fit scene for a source rendered by ``render(scene)``; ``environment_ok``: both adapters
+    render the studio environment; ``limit``: the noise above which a scene cannot resolve;
+    ``policy``: `Settings.fit_scene`."""
+    if policy == "as-given":
+        return FitScene(scene)
+    noise = source_noise(render, scene)
+    if noise <= GOAL or scene.views:
+        return FitScene(scene, noise=noise, scene_noise=noise)
+    spp = _samples_for(noise, scene.spp)
+    if spp <= scene.spp * MAX_SPP_FACTOR:
+        more = scene.with_(spp=spp)
+        n = source_noise(render, more)
+        if n <= min(limit, 2 * GOAL):
+            return FitScene(more, f"the source's render noise at {scene.spp} spp is {noise:.1%}: fitted at {spp} spp "
+                                  f"({n:.1%})", n, noise)
+    if policy == "auto" and environment_ok and scene.environment is None:
+        env = scene.model_copy(update={"lights": [EnvironmentLight(type="environment", map="studio")],
+                                       "name": f"{scene.name} under the studio environment"})
+        n = source_noise(render, env)
+        if n > GOAL:
+            spp = min(_samples_for(n, env.spp), env.spp * MAX_SPP_FACTOR)
+            env = env.with_(spp=spp)
+            n = source_noise(render, env)
+        if n <= limit:
+            return FitScene(env, f"the source's render noise at {scene.spp} spp is {noise:.0%} (a highlight smaller "
+                                 f"than a pixel): fitted under the studio environment at {env.spp} spp ({n:.1%}), "
+                                 "which a near-mirror reflects whole", n, noise)
+    return FitScene(scene, noise=noise, scene_noise=noise)

@@ -1,0 +1,81 @@
+"""The verdict's rules on errors, noise and held-out lights, from synthetic evidence (no renders),
+and the schedule's guards: the start kept when a fit ends worse, the coarse level a highlight allows."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from brdfremap.core.engine.assess import Assessment
+from brdfremap.core.engine.levels import Level
+from brdfremap.core.engine.results import Check, StageResult, Validation
+from brdfremap.core.engine.schedule import _never_worse, _State, coarse_size, highlight_pixels
+from brdfremap.core.engine.verdict import Evidence, judge
+
+CONVERGED = StageResult(name="all", lobe=None, fitted=["alpha"], renders=10, start_error=0.5, error=0.01,
+                        status="converged", detail="", seconds=0.1, resolution=128)
+
+
+def _check(name, error, floor):
+    return Check(condition=name, label=f"{name} light", description="", spp=64, resolution=128, error=error,
+                 perceptual=1.0, noise_floor=floor, beyond_noise=max(0.0, error**2 - floor**2) ** 0.5)
+
+
+def _judge(error, floor, checks=(), fitted=True):
+    ev = Evidence(error=error, noise_floor=floor, threshold=0.05, resolve_limit=0.10,
+                  assessment=Assessment(condition=10.0, no_effect=False), stages=[CONVERGED], cond_limit=1e4,
+                  renderer_notes=[], fitted=fitted, validation=Validation(checks=list(checks)))
+    return judge(ev, [])
+
+
+def test_the_threshold_is_fixed_and_judges_the_error_beyond_the_noise():
+    assert _judge(0.08, 0.07).status == "ok"  # 8 % of which 7 % is noise: 3.9 % beyond it
+    v = _judge(0.09, 0.03)  # 8.5 % beyond the noise: over 5 %, however noisy the source
+    assert v.status == "mismatch" and "8.5% beyond the render noise" in v.reason
+
+
+def test_a_noise_floor_over_the_limit_cannot_resolve_anything():
+    v = _judge(1.06, 0.77)  # the issue's α 0.002 gold: 106 % "ok" under a 155 % threshold
+    assert v.status == "unreliable" and [f.kind for f in v.problems] == ["cannot_resolve"]
+    assert "cannot resolve this material" in v.reason and "environment" in v.reason
+
+
+def test_an_unresolvable_condition_is_a_note_while_another_judges_the_result():
+    v = _judge(0.036, 0.012, [_check("rim", 4.5, 2.3), _check("environment", 0.029, 0.012)])
+    assert v.status == "ok" and any("rim light cannot resolve" in n for n in v.notes)
+    v = _judge(0.036, 0.012, [_check("rim", 4.5, 2.3), _check("environment", 0.20, 0.012)])
+    assert v.status == "unreliable" and "studio" not in v.reason and "environment light 20.0%" in v.reason
+
+
+def test_held_out_lights_count_in_the_verdict():
+    v = _judge(0.009, 0.005, [_check("grazing", 0.05, 0.01), _check("rim", 0.29, 0.02)])
+    assert v.status == "unreliable"
+    (held,) = [f for f in v.problems if f.kind == "held_out_above"]
+    assert [c.condition for c in held.conditions] == ["rim"]  # grazing: 4.9 % beyond its noise
+    assert "does not look the same under held-out lights: rim light 29.0%" in v.reason
+
+
+def test_with_nothing_fitted_there_is_no_talk_of_a_fit_or_a_mismatch():
+    v = _judge(0.2, 0.01, fitted=False)
+    assert v.status == "unreliable" and "mismatch" not in v.reason and "fit" not in v.reason
+    assert any("nothing was fitted" in n for n in v.notes)
+
+
+def test_the_start_is_kept_when_every_fitted_point_is_worse():
+    run = SimpleNamespace(free=["alpha"], notes=[])
+    start, fitted = _State({"alpha": 0.05}, None, 0.016), _State({"alpha": 0.2}, None, 0.506)
+    assert _never_worse(run, start, fitted) is start
+    assert run.notes[0].kind == "start_kept" and "1.60%" in run.notes[0].message
+    better = _State({"alpha": 0.06}, None, 0.01)
+    assert _never_worse(run, start, better) is better and len(run.notes) == 1
+
+
+@pytest.mark.parametrize("spot, expect", [(1, 0), (40, 48), (400, 32)])
+def test_a_highlight_smaller_than_the_coarse_pixels_raises_or_drops_the_coarse_level(spot, expect):
+    img = np.zeros((128, 128, 3), np.float32)
+    side = int(round(spot**0.5))
+    img[40:40 + side, 40:40 + side] = 1.0
+    assert highlight_pixels(img) == pytest.approx(side * side / 2, abs=side)
+    size = coarse_size(Level(render=None, source=img), 32, 2.0)
+    assert (size if 2 * size <= 128 else 0) == expect
