@@ -114,7 +114,8 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
     env_ok = all("environment" in adapters[n].light_types for n in (src.adapter, tgt.adapter))
     fit = choose_scene(lambda sc: source(resolved.source_params, scene=sc), job.scene, env_ok,
                        job.settings.resolve_limit, job.settings.fit_scene)
-    renders = ProbeRenders(source, resolved.source_params, resolved.source_spec, target, fit.scene, given=job.scene)
+    renders = ProbeRenders(source, resolved.source_params, resolved.source_spec, target, fit.scene, given=job.scene,
+                           given_noise=fit.scene_noise)
     start = informed_start(resolved, adapters) if job.settings.start == "informed" else {}
     result = remap(resolved.target_spec, {**resolved.base, **start}, resolved.free, renders, job.settings, job.tuning,
                    progress, alternatives=alternatives(resolved, start) if job.settings.start == "informed" else [])
@@ -162,7 +163,7 @@ def informed_start(resolved: Resolved, adapters: AdapterPool) -> dict[str, Value
     spec = resolved.target_spec
     for p in spec.parameters:
         if (p.kind == "choice" and p.name not in resolved.fixed and conv.get(p.name) in p.choices
-                and conv[p.name] != resolved.base[p.name]):
+                and _named(adapters[job.target.adapter], job.target.model, look, resolved.base, p, conv[p.name])):
             out[p.name] = conv[p.name]
     for name in resolved.free:
         try:
@@ -172,6 +173,17 @@ def informed_start(resolved: Resolved, adapters: AdapterPool) -> dict[str, Value
         if all(map(math.isfinite, v if isinstance(v, tuple) else (v,))):  # type: ignore[arg-type]
             out[name] = v
     return out
+
+
+def _named(adapter, model: str, look, base: dict[str, Value], p, value: Value) -> bool:
+    """Whether the reading names this choice: it differs from the base, or it stays when the base
+    holds another value (a source's GGX where GGX is also the default is named all the same)."""
+    if value != base[p.name]:
+        return True
+    other = next((c for c in p.choices if c != value), None)
+    if other is None:
+        return False
+    return adapter.from_appearance(model, look, {**base, p.name: other}).get(p.name) == value
 
 
 def alternatives(resolved: Resolved, start: dict[str, Value]) -> list[dict[str, Value]]:

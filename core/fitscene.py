@@ -61,7 +61,7 @@ def choose(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, enviro
     if noise <= GOAL or scene.views:
         return FitScene(scene, noise=noise, scene_noise=noise)
     spp = _samples_for(noise, scene.spp)
-    if spp <= scene.spp * MAX_SPP_FACTOR:
+    if scene.spp < spp <= scene.spp * MAX_SPP_FACTOR:
         more = scene.with_(spp=spp)
         n = source_noise(render, more)
         if n <= min(limit, 2 * GOAL):

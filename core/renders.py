@@ -101,7 +101,8 @@ class ProbeRenders:
     """`core.engine.Renders` for a source material and a target model."""
 
     def __init__(self, source: CachedRenderer, source_params: dict[str, Value], source_spec: ModelSpec,
-                 target: CachedRenderer, scene: ProbeScene, given: ProbeScene | None = None):
+                 target: CachedRenderer, scene: ProbeScene, given: ProbeScene | None = None,
+                 given_noise: float = 0.0):
         self.source, self.source_params, self.source_spec = source, dict(source_params), source_spec
         self.target, self.scene = target, scene
         self.job_scene = given if given is not None else scene
@@ -109,6 +110,8 @@ class ProbeRenders:
         self.other_lights = self.job_scene.with_(spp=scene.spp).cache_key() != scene.cache_key()
         """The fit ran under other lights than the job's (`core.fitscene`): those are checked too.
         (A fit at more samples of the same lights measured the job's scene already.)"""
+        self.given_noise = given_noise
+        """Two source renders' difference on the job's scene, measured before the fit."""
         self._levels: dict[tuple[str, bool], Level] = {}
         self._noise: float | None = None
 
@@ -159,7 +162,8 @@ class ProbeRenders:
         # Held-out lights take the job's scene (its camera, size and samples), not a fit scene made
         # finer for a sharp source: their samples follow what the user asked for.
         return validate(lambda sc: self.source(self.source_params, scene=sc), lambda sc: self.target(params, scene=sc),
-                        self.job_scene, problems, given=self.other_lights)
+                        self.job_scene, problems, given=self.other_lights,
+                        given_noise=self.given_noise, fit_lights=self.scene.view_scenes()[0].lights)
 
     def notes(self, params: dict[str, Value]) -> list[str]:
         return list(self.target.adapter.notes(self.target.model, params))

@@ -108,9 +108,24 @@ def _held_out(r: Report) -> str:
     return ", ".join(parts) + f"   ({where}; seeds the fit never saw)"
 
 
+def _verdict(r: Report) -> str:
+    """The status and why; an ok that only some conditions could judge names them."""
+    word = {"ok": "ok", "mismatch": "MISMATCH", "unreliable": "UNRELIABLE"}[r.verdict]
+    if not r.reliable:
+        return f"{word}: {r.reason}"
+    limit = r.job.settings.resolve_limit
+    judged = [c.label for c in r.validation if c.noise_floor <= limit]
+    unresolved = [c.label for c in r.validation if c.noise_floor > limit]
+    if not unresolved:
+        return word
+    if r.metrics.noise_floor <= limit:
+        judged.insert(0, "the fit scene")
+    return (f"{word}, judged under {', '.join(judged)} only: "
+            f"{', '.join(unresolved)} cannot resolve this material (render noise over {limit:.0%})")
+
+
 def _print(r: Report, folder, resumed: bool) -> None:
     m = r.metrics
-    verdict = {"ok": "ok", "mismatch": "MISMATCH", "unreliable": "UNRELIABLE"}[r.verdict]
     rows = [
         ("params", _params(r.params)),
         ("relative RMSE", f"{m.relative_rmse:.2%}   (noise floor {m.noise_floor:.2%})"),
@@ -124,7 +139,7 @@ def _print(r: Report, folder, resumed: bool) -> None:
         ("seconds", f"{r.seconds:.2f}" + ("   (the stored result of this same job: --force to fit again)"
                                           if resumed else "")),
         ("scheme", r.scheme if r.scheme == r.scheme_used else f"{r.scheme} (used {r.scheme_used})"),
-        ("verdict", verdict + ("" if r.reliable else f": {r.reason}")),
+        ("verdict", _verdict(r)),
         ("wrote", f"{folder}/ ({', '.join([f.name for f in r.files] + ['result.json'])})"),
     ]
     width = max(len(k) for k, _ in rows)

@@ -109,7 +109,7 @@ def remap(target: ModelSpec, base: dict[str, Value], free: list[str], renders: R
     state = _never_worse(run, start, _fit_stages(run, plan, dict(base)))
     assessment = run.assess(state)
     state, assessment, joint = _refine_jointly(run, plan, state, assessment)
-    state, assessment = _polish_noise_limited(run, state, assessment)
+    state, assessment = _polish_noise_limited(run, state, assessment, start.err)
     return _conclude(run, plan, state, assessment, joint, t0, start.err)
 
 
@@ -287,12 +287,14 @@ PRECISE_SLACK = 0.05
 """How much a noise polish may raise the scene-level error (relative) and be kept."""
 
 
-def _polish_noise_limited(run: _Run, state: _State, assessment: Assessment) -> tuple[_State, Assessment]:
+def _polish_noise_limited(run: _Run, state: _State, assessment: Assessment, ceiling: float
+                          ) -> tuple[_State, Assessment]:
     """The fit ended within a few times the render noise: what is left is noise, which more
     samples shrink where more iterations cannot (the target's noise biases a fitted reflectance
     low). One short polish of every free parameter, source and target at `precise_spp` times the
     samples, kept if it lowers the error there and does not raise the error at the scene's samples
-    (the error reported) by more than `PRECISE_SLACK`: at the noise those two differ by noise alone."""
+    (the error reported) by more than `PRECISE_SLACK` (at the noise those two differ by noise
+    alone), nor above ``ceiling`` (the start's error: a result is never worse than its start)."""
     k, scene = run.settings.precise_spp, run.renders.scene
     if k <= 1 or not run.free or not state.err < run.tuning.precise_below * run.source_noise:
         return state, assessment
@@ -303,7 +305,7 @@ def _polish_noise_limited(run: _Run, state: _State, assessment: Assessment) -> t
     stage = run.stage(config, space, level, None)
     params = space.decode(stage.run(space.encode(state.params)))
     image, err = run.render_final(params) if stage.result.error < stage.result.start_error else (None, state.err)
-    kept = image is not None and err <= state.err * (1 + PRECISE_SLACK)
+    kept = image is not None and err <= min(state.err * (1 + PRECISE_SLACK), ceiling)
     run.stages.append(stage.result.model_copy(update={"kept": kept}))
     if not kept:
         return state, assessment

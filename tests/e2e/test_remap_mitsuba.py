@@ -49,7 +49,7 @@ def test_identity_ggx_recovers_alpha_within_one_percent(tmp_path, root, mitsuba_
     # From the informed start (the same model: the source's own α) it only has to confirm it.
     _, informed = _run(tmp_path / "informed", root, "aluminium-ggx.yaml", "--adapter", "mitsuba",
                        "--model", "roughconductor", "--validate", "none")
-    assert informed["start"] == {"informed": True, "params": {"alpha": 0.3}}
+    assert informed["start"] == {"informed": True, "params": {"distribution": "ggx", "alpha": 0.3}}  # named: kept
     assert informed["metrics"]["relative_rmse"] <= informed["metrics"]["noise_floor"]
     assert informed["renders"] < r["renders"] / 2 and informed["reliable"] is True
 
