@@ -75,12 +75,12 @@ class _Run:
                       jacobian_updates=self.settings.jacobian_updates, seed=state.last, held=state.held,
                       good_enough=self.good_enough)
 
-    def render_final(self, params: dict[str, Value]) -> tuple[np.ndarray, float]:
+    def render_final(self, params: dict[str, Value], label: str = "final") -> tuple[np.ndarray, float]:
         image = np.asarray(self.scene.render(params, None), dtype=np.float32)
         self.tally.requests += 1
         err = relative_rmse(self.scene.source, image)
         if self.progress:
-            self.progress("final", self.tally.requests, err)
+            self.progress(label, self.tally.requests, err)
         return image, err
 
 
@@ -105,7 +105,7 @@ def remap(target: ModelSpec, base: dict[str, Value], free: list[str], renders: R
     base = _choose(run, dict(base), list(alternatives))
     plan = plan_stages(settings.scheme, target, free, run.scene.source_lobes)
     run.notes += plan.findings
-    start = _State(dict(base), *run.render_final(dict(base)))
+    start = _State(dict(base), *run.render_final(dict(base), "start"))
     state = _never_worse(run, start, _fit_stages(run, plan, dict(base)))
     assessment = run.assess(state)
     state, assessment, joint = _refine_jointly(run, plan, state, assessment)
