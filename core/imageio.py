@@ -92,6 +92,19 @@ def read_rgb(path: Path) -> tuple[np.ndarray | None, str, int]:
     return (None if pixels is None else np.asarray(pixels, dtype=np.float32)), why, nch
 
 
+def pixel_format(path: Path) -> str:
+    """The stored pixel type of an image file ("half", "float", "uint8", ...), "" when unreadable."""
+    import OpenImageIO as oiio
+
+    with captured_stderr():
+        inp = oiio.ImageInput.open(str(path))
+        if inp is None:
+            return ""
+        fmt = str(inp.spec().format)
+        inp.close()
+    return fmt
+
+
 def read_image(path: Path) -> np.ndarray:
     pixels, why, _ = read_rgb(path)
     if pixels is None:

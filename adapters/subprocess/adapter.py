@@ -19,35 +19,15 @@ from typing import Any
 
 import numpy as np
 from brdfremap.core.errors import ConfigError, RenderError
-from brdfremap.core.imageio import read_rgb
+from brdfremap.core.imageio import pixel_format, read_rgb
 from brdfremap.core.protocol import Adapter
 from brdfremap.core.scene import ProbeScene
 from brdfremap.core.schemas import Value, format_value
 from brdfremap.core.scratch import scratch_dir
 from brdfremap.core.workerproc import JsonLinesWorker, die_with_parent
 
-from .definition import _TOKEN, RendererDef, load_definition
-
-
-def template_vars(scene: ProbeScene) -> dict[str, str]:
-    cam, light, sph = scene.camera, scene.point_lights[0], scene.sphere
-    out = {"width": scene.resolution, "height": scene.resolution, "spp": scene.spp, "seed": scene.seed,
-           "fov": cam.fov, "sphere_radius": sph.radius, "light_intensity": light.intensity}
-    for prefix, vec in (("camera", cam.position), ("target", cam.target), ("up", cam.up),
-                        ("light", light.position), ("sphere", sph.center)):
-        for axis, v in zip("xyz", vec):
-            out[f"{prefix}_{axis}"] = v
-    return {k: (f"{v:.9g}" if isinstance(v, float) else str(v)) for k, v in out.items()}
-
-
-def substitute(text: str, values: dict[str, str], where: str) -> str:
-    def one(m):
-        name = m.group(1)
-        if name not in values:
-            raise ConfigError(f"unknown placeholder {{{name}}}", field=where)
-        return values[name]
-
-    return _TOKEN.sub(one, text)
+from .definition import RendererDef, load_definition
+from .template import scene_vars, substitute
 
 
 def which(exe: str) -> str | None:
@@ -116,6 +96,7 @@ class SubprocessAdapter(Adapter):
             self.worker = JsonLinesWorker(argv, name=f"renderer {d.name!r}", env=self.env, cwd=self.here,
                                           start_timeout=d.start_timeout, request_timeout=d.timeout)
         self.count = 0
+        self.warned_depth = False
 
     def describe(self) -> dict[str, Any]:
         return {"renderer": f"external: {self.definition.name}", "definition": str(self.source_file),
@@ -172,8 +153,9 @@ class SubprocessAdapter(Adapter):
                   "model": model, "width": str(scene.resolution), "height": str(scene.resolution),
                   "spp": str(scene.spp), "seed": str(scene.seed), "python": sys.executable, "here": self.here}
         if self.template is not None:
-            tvars = {**template_vars(scene), "model": model, **{f"p_{k}": self._value(v) for k, v in p.items()}}
-            tvars.update(d.models[model].template_vars)
+            tvars = {**scene_vars(scene), "model": model, **{f"p_{k}": self._value(v) for k, v in p.items()}}
+            tvars.update({k: substitute(text, tvars, f"models.{model}.template_vars.{k}")
+                          for k, text in d.models[model].template_vars.items()})
             scene_file = job / f"scene{Path(d.scene_template).suffix}"
             scene_file.write_text(substitute(self.template, tvars, f"scene_template {d.scene_template}"))
             values["scene_file"] = str(scene_file)
@@ -217,7 +199,8 @@ class SubprocessAdapter(Adapter):
 
     def _read(self, model, p, output: Path, scene: ProbeScene, stderr: str) -> np.ndarray:
         if not output.exists() or output.stat().st_size == 0:
-            raise self._fail(model, p, f"wrote no image at {output.name}", stderr)
+            raise self._fail(model, p, f"wrote no image at {output.name}{_what_it_wrote(output)}", stderr)
+        self._check_depth(output)
         pixels, why, nch = read_rgb(output)
         if pixels is None and 0 < nch < 3:
             raise self._fail(model, p, f"image has {nch} channels, need RGB", stderr)
@@ -234,10 +217,34 @@ class SubprocessAdapter(Adapter):
             img = _srgb_to_linear(img)  # an 8-bit PNG is display-encoded
         return img
 
+    def _check_depth(self, output: Path) -> None:
+        """Say once if a float format stores too few bits: a finite difference of a fraction of a
+        percent, and a lobe sum, are lost in rounding (8-bit PNG is display-encoded, and known)."""
+        fmt = pixel_format(output)
+        if self.warned_depth or self.definition.output_format == "png" or fmt in ("float", "double", ""):
+            return
+        self.warned_depth = True
+        print(f"warning: renderer {self.definition.name!r} writes {fmt} pixels to {output.suffix}: a fit needs "
+              "32-bit float (half floats round at 0.1 %, finer than a Jacobian's steps); set the renderer's output "
+              "to float32", file=sys.stderr)
+
     def close(self) -> None:
         if self.worker is not None:
             self.worker.close()
         shutil.rmtree(self.work, ignore_errors=True)
+
+
+_REQUEST_FILES = ("scene.json", "params.json")
+
+
+def _what_it_wrote(output: Path) -> str:
+    """The files the renderer did write beside the expected image, if any (image.exr.png)."""
+    try:
+        found = sorted(f.name for f in output.parent.iterdir()
+                       if f.name not in _REQUEST_FILES and not f.name.startswith("scene."))
+    except OSError:
+        return ""
+    return f" (it wrote: {', '.join(found[:8])})" if found else " (it wrote no file there)"
 
 
 def adapter_class(path: str | Path) -> type[SubprocessAdapter]:

@@ -1,0 +1,128 @@
+"""Renderer definitions a new user writes (issue 18): a scene language with braces of its own, a
+model's text carrying its values, faults named at load time or with what the renderer did write.
+Each runs a real renderer process: tests/data/renderers/brace_renderer.py."""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from brdfremap.adapters.subprocess.adapter import adapter_class
+from brdfremap.core.errors import ConfigError, RenderError
+from brdfremap.core.metrics import relative_rmse
+from brdfremap.core.scene import ProbeScene
+from brdfremap.core.testing import analytic_lambert
+
+DATA = Path(__file__).resolve().parents[1] / "data" / "renderers"
+SCENE = ProbeScene(resolution=32, spp=4)
+
+TEMPLATE = """# brace scene: {{ and }} are literal braces, even in a comment like this {{not_a_placeholder}}
+scene {{
+  size = {width} x {height}
+}}
+material {{
+  {material}
+}}
+"""
+
+
+def _definition(tmp_path, *, template=TEMPLATE, material="albedo = {p_albedo}", extra_args=(), output="exr",
+                lobes="{diffuse: {}, specular: empty}", params=None) -> Path:
+    (tmp_path / "scene.brace").write_text(template)
+    args = ", ".join(f'"{a}"' for a in ["{python}", str(DATA / "brace_renderer.py"), "{scene_json}", "{scene_file}",
+                                         "{output}", *extra_args])
+    params = params or "[{name: albedo, kind: rgb, default: [0.5, 0.5, 0.5]}]"
+    path = tmp_path / "brace.yaml"
+    path.write_text(f"name: brace\ncommand: [{args}]\nscene_template: scene.brace\noutput_format: {output}\n"
+                    f"rgb_format: '{{r}} {{g}} {{b}}'\ntimeout: 30\n"
+                    f"models:\n  lambert:\n    parameters: {params}\n    lobes: {lobes}\n"
+                    f"    template_vars:\n      material: '{material}'\n")
+    return path
+
+
+def _render(path, albedo=(0.2, 0.4, 0.6)):
+    adapter = adapter_class(path)()
+    try:
+        return adapter.render("lambert", adapter.models["lambert"].complete({"albedo": list(albedo)}), SCENE)
+    finally:
+        adapter.close()
+
+
+def test_a_models_text_carries_its_values_into_a_brace_language(tmp_path):
+    """New user's item 1 and 2: {p_albedo} inside template_vars is filled (RGB through rgb_format),
+    and {{ }} write the scene language's own braces."""
+    img = _render(_definition(tmp_path))
+    want = analytic_lambert(SCENE, np.array([0.2, 0.4, 0.6], np.float32))
+    assert relative_rmse(want, img) < 1e-5
+
+
+@pytest.mark.parametrize("template, line, name", [
+    (TEMPLATE.replace("size = {width}", "size = {widht}"), 3, "widht"),
+    ("# a comment with {braces}\n" + TEMPLATE, 1, "braces"),
+])
+def test_an_unknown_placeholder_is_named_with_file_and_line_when_loaded(tmp_path, template, line, name):
+    path = _definition(tmp_path, template=template)
+    with pytest.raises(ConfigError) as exc:
+        adapter_class(path)
+    msg = str(exc.value)
+    assert f"scene.brace: line {line}: unknown placeholder {{{name}}}" in msg and "{{ or }}" in msg, msg
+    assert "\n" not in msg
+
+
+def test_a_template_var_naming_another_models_parameter_is_refused_when_loaded(tmp_path):
+    path = _definition(tmp_path, material="albedo = {p_colour}")
+    with pytest.raises(ConfigError) as exc:
+        adapter_class(path)
+    assert "models.lambert.template_vars.material" in str(exc.value) and "{p_colour}" in str(exc.value)
+
+
+def test_no_image_where_asked_lists_what_the_renderer_did_write(tmp_path):
+    """Item 5: "wrote no image at image.exr" when it wrote image.exr.png beside it."""
+    with pytest.raises(RenderError) as exc:
+        _render(_definition(tmp_path, extra_args=["--misname"]))
+    assert "wrote no image at image.exr (it wrote: image.exr.png)" in str(exc.value)
+
+
+def test_radiance_hdr_is_read(tmp_path):
+    """Item 6: .hdr was refused as an output format."""
+    img = _render(_definition(tmp_path, output="hdr"))
+    want = analytic_lambert(SCENE, np.array([0.2, 0.4, 0.6], np.float32))
+    assert relative_rmse(want, img) < 0.01  # RGBE: an 8-bit mantissa
+
+
+def test_half_float_pixels_are_warned_about_once(tmp_path, capsys):
+    adapter = adapter_class(_definition(tmp_path, extra_args=["--pixels", "half"]))()
+    try:
+        params = adapter.models["lambert"].complete({"albedo": [0.2, 0.4, 0.6]})
+        adapter.render("lambert", params, SCENE)
+        adapter.render("lambert", params, SCENE.with_(seed=1))
+    finally:
+        adapter.close()
+    err = capsys.readouterr().err
+    assert err.count("writes half pixels") == 1 and "float32" in err, err
+
+
+def test_an_ambiguous_short_lobe_form_is_refused_showing_the_long_form(tmp_path):
+    """Item 7: a colour both lobes share went to the specular stage (57.8 % after the merge)."""
+    params = ("[{name: color, kind: rgb, default: [0.5, 0.5, 0.5]}, {name: diffuse, kind: scalar, default: 1}, "
+              "{name: specular, kind: scalar, default: 0.5}]")
+    path = _definition(tmp_path, params=params, material="albedo = {p_color}",
+                       lobes="{diffuse: {specular: 0}, specular: {diffuse: 0}}")
+    with pytest.raises(ConfigError) as exc:
+        adapter_class(path)
+    msg = str(exc.value)
+    assert "brace.yaml" in msg and "leaves color to neither lobe" in msg and "params: [specular, color]" in msg, msg
+
+
+def test_the_command_line_has_escapes_too(tmp_path):
+    path = _definition(tmp_path, extra_args=["{{literal}}"])
+    text = path.read_text()
+    assert "{{literal}}" in text
+    with pytest.raises(RenderError) as exc:  # the renderer gets "{literal}" and refuses an unknown argument
+        _render(path)
+    assert "{literal}" in str(exc.value) and "{{literal}}" not in str(exc.value)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(pytest.main([__file__, "-q"]))
