@@ -104,15 +104,22 @@ def _renderers(pool, case: tuple):
     return scene, s_params, src, tgt, tgt_ad.models[model]
 
 
-def held_out(pool, case: tuple, params: dict) -> dict:
+def held_out(pool, case: tuple, params: dict, moved: bool) -> dict:
     """A fitted target against the source: the probe at 16 spp (with its floor from a second
-    seed) and each held-out condition, by this checkout's `core.validation`."""
+    seed) and each held-out condition, by this checkout's `core.validation`. ``moved``: the tool
+    fitted elsewhere (its report's `fit_scene`); its lights are then found again as the tool finds
+    them (`core.fitscene`, a few source renders), so that where the fit ran under the studio the
+    held-out studio is turned, as in the tool's own report."""
+    from brdfremap.core.fitscene import choose
     from brdfremap.core.metrics import relative_rmse
+    from brdfremap.core.settings import Settings
     from brdfremap.core.validation import validate
 
     scene, s_params, src, tgt, t_spec = _renderers(pool, case)
     fitted = t_spec.complete(params)
-    v = validate(lambda sc: src(s_params, scene=sc), lambda sc: tgt(fitted, scene=sc), scene, lambda sc: None)
+    fit = choose(lambda sc: src(s_params, scene=sc), scene, True, Settings().resolve_limit) if moved else None
+    v = validate(lambda sc: src(s_params, scene=sc), lambda sc: tgt(fitted, scene=sc), scene, lambda sc: None,
+                 fit_lights=fit.scene.lights if fit else scene.lights)
     source_image, second = src(s_params), scene.with_(seed=1)
     probe_floor = float(np.hypot(relative_rmse(source_image, src(s_params, scene=second)),
                                  relative_rmse(tgt(fitted), tgt(fitted, scene=second))) / np.sqrt(2))
@@ -136,7 +143,7 @@ def evaluate(pool, case: tuple, doc: dict) -> dict:
         "fit_scene": (doc.get("fit_scene") or {}).get("why", ""),
         "error_fitted": doc["metrics"]["relative_rmse"], "start_error_fitted": doc["metrics"].get("start_error"),
         "threshold": doc["metrics"]["threshold"], "renders": doc["renders"], "seconds": doc["seconds"],
-        "params": doc["params"], **held_out(pool, case, doc["params"]),
+        "params": doc["params"], **held_out(pool, case, doc["params"], bool(doc.get("fit_scene"))),
     }
 
 
@@ -151,7 +158,7 @@ def reevaluate(args) -> None:
     pool = AdapterPool(collect_adapters())
     try:
         for row in _done(run["rows"]):
-            row.update(held_out(pool, cases[row["case"]], row["params"]))
+            row.update(held_out(pool, cases[row["case"]], row["params"], bool(row.get("fit_scene"))))
             print(f"{row['case']:<42} probe {row['probe']:6.1%}  " + "  ".join(
                 f"{k} {v['error']:6.1%}" for k, v in row["held_out"].items()), flush=True)
     finally:
