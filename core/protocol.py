@@ -37,6 +37,9 @@ class Adapter(abc.ABC):
     install_hint: ClassVar[str] = ""
     models: ClassVar[dict[str, ModelSpec]] = {}
     light_types: ClassVar[frozenset[str]] = frozenset({"point"})
+    calibration: ClassVar[tuple[str, dict] | None] = None
+    """A white diffuse material of albedo 0.8 (model, params), which `remap check` renders against
+    the analytic radiance; None: the adapter has none to offer."""
     """The light types of `core.scene` this adapter realises, in the same units and orientation
     as every other (its calibration tests cover each)."""
 

@@ -100,6 +100,7 @@ class CyclesAdapter(Adapter):
     install_hint = "pip install 'brdf-remap[cycles]' (bpy 5.0, Python 3.11)"
     models = MODELS
     light_types = frozenset({"point", "environment"})
+    calibration = ("diffuse", {"color": 0.8})
     max_cached = 8
 
     @classmethod

@@ -170,6 +170,7 @@ class MitsubaAdapter(Adapter):
     install_hint = "pip install 'brdf-remap[mitsuba]'"
     models = MODELS
     light_types = frozenset({"point", "environment"})
+    calibration = ("diffuse", {"reflectance": 0.8})
     max_scenes = 8
 
     @classmethod

@@ -256,6 +256,7 @@ def adapter_class(path: str | Path) -> type[SubprocessAdapter]:
         "version": _version(path, d),
         "summary": d.description or f"external renderer ({d.mode}) from {path}",
         "install_hint": f"see {path}",
+        "calibration": (d.calibration.model, dict(d.calibration.params)) if d.calibration else None,
     })
 
 

@@ -31,6 +31,13 @@ class ModelDef(BaseModel):
                                                       "placeholders and {p_<parameter>} (RGB through rgb_format).")
 
 
+class Calibration(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    model: str
+    params: dict[str, Any] = Field(default_factory=dict)
+
+
 class RendererDef(BaseModel):
     """An external renderer run as a command: one process per render, or one persistent process."""
 
@@ -54,6 +61,8 @@ class RendererDef(BaseModel):
     requires: list[str] = Field(default_factory=list,
                                 description="Executables or Python modules that must exist (`py:module`).")
     models: dict[str, ModelDef]
+    calibration: "Calibration | None" = Field(None, description="A white diffuse material of albedo 0.8, which "
+                                                                "`remap check` renders against the analytic radiance.")
 
     @field_validator("command")
     @classmethod
@@ -87,6 +96,9 @@ class RendererDef(BaseModel):
 
     @model_validator(mode="after")
     def _modes(self) -> "RendererDef":
+        if self.calibration is not None and self.calibration.model not in self.models:
+            raise ValueError(f"calibration: model {self.calibration.model!r} is not one of models "
+                             f"({', '.join(self.models)})")
         if self.mode == "oneshot" and not any("{output}" in a for a in self.command):
             raise ValueError("command: a oneshot command must say where to write the image: use {output}")
         if any("{scene_file}" in a for a in self.command) and not self.scene_template:

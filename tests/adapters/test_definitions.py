@@ -126,3 +126,54 @@ def test_the_command_line_has_escapes_too(tmp_path):
 
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(pytest.main([__file__, "-q"]))
+
+
+def _check(path, *args):
+    import subprocess
+
+    return subprocess.run([sys.executable, "-m", "brdfremap.core.cli", "check", str(path), *args],
+                          capture_output=True, text=True, timeout=300)
+
+
+def _checked(tmp_path, *extra):
+    path = _definition(tmp_path, extra_args=list(extra))
+    path.write_text(path.read_text() + "calibration: {model: lambert, params: {albedo: [0.8, 0.8, 0.8]}}\n")
+    return _check(path)
+
+
+def test_remap_check_passes_a_correct_renderer(tmp_path):
+    proc = _checked(tmp_path)
+    assert proc.returncode == 0 and "all checks pass" in proc.stdout and "FAIL" not in proc.stdout, proc.stdout
+
+
+@pytest.mark.parametrize("fault, row, words", [
+    (["--scale", "3.14159265"], "units", "a factor of π"),
+    (["--scale", "0.0795774715"], "units", "a factor of 1/(4π)"),
+    (["--mirror"], "orientation", "the image is mirrored left-right"),
+    (["--clip"], "precision", "clipped"),
+    (["--pixels", "half"], "precision", "half float"),
+])
+def test_remap_check_names_each_fault(tmp_path, fault, row, words):
+    """Item 3: wrong units (and the factor), a mirrored image, clipping, half floats: each a failed
+    row with its fix; exit 1."""
+    proc = _checked(tmp_path, *fault)
+    failing = [line for line in proc.stdout.splitlines() if line.strip().startswith("FAIL")]
+    assert proc.returncode == 1 and any(row in line and words in line for line in failing), proc.stdout
+    assert "fix:" in proc.stdout and "Traceback" not in proc.stderr
+
+
+def test_remap_check_without_a_calibration_material_says_what_is_missing(tmp_path):
+    proc = _check(_definition(tmp_path))
+    assert proc.returncode == 1 and "not run" in proc.stdout and "calibration: {model: ..." in proc.stdout, proc.stdout
+
+
+SHIPPED = Path(__file__).resolve().parents[2] / "configs" / "renderers"
+
+
+@pytest.mark.parametrize("adapter, needs", [("mitsuba", "mitsuba"), ("cycles", "bpy"),
+                                            (str(SHIPPED / "mitsuba-cli.yaml"), "mitsuba"),
+                                            (str(SHIPPED / "cycles-subprocess.yaml"), "bpy")])
+def test_remap_check_passes_the_built_in_and_shipped_adapters(adapter, needs):
+    pytest.importorskip(needs)
+    proc = _check(adapter)
+    assert proc.returncode == 0 and "all checks pass" in proc.stdout, proc.stdout + proc.stderr

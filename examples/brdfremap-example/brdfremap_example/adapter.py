@@ -33,6 +33,7 @@ class ToyAdapter(Adapter):
     name = "toy"
     summary = "analytic numpy sphere (example adapter package)"
     models = {"toy": TOY}
+    calibration = ("toy", {"diffuse": 0.8, "specular": 0.0})
 
     def __init__(self):
         self.calls = 0

@@ -1,12 +1,15 @@
 """A command-line renderer whose scene language uses braces, for the renderer-definition tests.
 
     brace_renderer.py SCENE_JSON SCENE_FILE OUTPUT [--pixels float|half] [--misname]
+                      [--scale F] [--mirror] [--clip]
 
 It reads the probe's geometry from SCENE_JSON and the material from SCENE_FILE, written in its
 own language: blocks in braces, `#` comments (which may hold braces too), and one line
 `albedo = R G B` inside `material { ... }`. It renders the analytic Lambert sphere and writes
 OUTPUT (EXR, or Radiance HDR by its suffix) with 32-bit or half-float pixels; ``--misname``
-writes OUTPUT.png instead, as a renderer that appends its own suffix does."""
+writes OUTPUT.png instead, as a renderer that appends its own suffix does. The faults `remap
+check` must name: ``--scale`` (wrong units), ``--mirror`` (left and right swapped), ``--clip``
+(values clipped at 1, as an 8-bit image is)."""
 
 import argparse
 import json
@@ -38,9 +41,16 @@ def main() -> None:
     p.add_argument("output")
     p.add_argument("--pixels", choices=["float", "half"], default="float")
     p.add_argument("--misname", action="store_true")
+    p.add_argument("--scale", type=float, default=1.0)
+    p.add_argument("--mirror", action="store_true")
+    p.add_argument("--clip", action="store_true")
     args = p.parse_args()
     doc = json.loads(Path(args.scene_json).read_text())
-    pixels = image(doc, np.asarray(albedo(Path(args.scene_file).read_text()), np.float32))
+    pixels = image(doc, np.asarray(albedo(Path(args.scene_file).read_text()), np.float32)) * args.scale
+    if args.mirror:
+        pixels = pixels[:, ::-1]
+    if args.clip:
+        pixels = np.minimum(pixels, 1.0)
     import OpenImageIO as oiio
 
     path = args.output + (".png" if args.misname else "")

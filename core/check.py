@@ -1,0 +1,151 @@
+"""`remap check`: the adapter contract run from the command line, for any adapter.
+
+Each check renders the probe and compares it with what the conventions say it must be: the
+white Lambertian sphere against the analytic radiance (and, when it is off, the factor: π, 2,
+4π ... name the usual mistakes), the image's orientation under an asymmetric light, bit-identical
+renders for one seed, lobes that sum to the full image, pixel precision and clipping. Every
+result is a row with what to fix; nothing here names a renderer."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from .metrics import relative_rmse
+from .scene import PointLight, ProbeScene
+from .testing import analytic_lambert, sphere_hits
+
+SCENE = ProbeScene(resolution=48, spp=16)
+CALIBRATION = ProbeScene(resolution=64, spp=64)
+ALBEDO = 0.8
+CALIBRATION_TOLERANCE, LOBE_TOLERANCE = 0.01, 1e-4
+FACTORS = {"π": math.pi, "1/π": 1 / math.pi, "2": 2.0, "1/2": 0.5, "4π": 4 * math.pi, "1/(4π)": 1 / (4 * math.pi),
+           "2π": 2 * math.pi, "1/(2π)": 1 / (2 * math.pi)}
+"""Scale errors with a usual cause: radiance against irradiance (π), power against intensity (4π)."""
+BRIGHT = 200.0
+"""The intensity scale of the clipping check: the sphere's brightest pixels well above 1."""
+
+
+@dataclass(frozen=True)
+class Row:
+    name: str
+    passed: bool | None
+    """None: not run (what it needs is missing), which is not a pass."""
+    detail: str
+    fix: str = ""
+
+
+def _factor(ratio: float) -> str:
+    """The usual factor a ratio is nearest to (within 3 %), or ""."""
+    name, value = min(FACTORS.items(), key=lambda kv: abs(math.log(ratio / kv[1])))
+    return name if abs(math.log(ratio / value)) < 0.03 else ""
+
+
+def calibration(render: Callable, white: tuple[str, dict] | None) -> Row:
+    name = "units: white Lambertian against the analytic radiance"
+    if white is None:
+        return Row(name, None, "no calibration material", "declare a white diffuse material of albedo 0.8 "
+                   "(a definition's `calibration: {model: ..., params: {...}}`)")
+    img = render(white[0], white[1], CALIBRATION)
+    inner = sphere_hits(CALIBRATION).interior
+    want = analytic_lambert(CALIBRATION, ALBEDO)[inner]
+    err = relative_rmse(want, img[inner])
+    if err < CALIBRATION_TOLERANCE:
+        return Row(name, True, f"{err:.2%} from the analytic radiance")
+    ratio = float(img[inner].sum() / max(want.sum(), 1e-30))
+    known = _factor(ratio)
+    why = f"{err:.2%} off; the image is {ratio:.4g}x the analytic radiance" + (f" (a factor of {known})" if known else "")
+    return Row(name, False, why, "pixels are radiance (W m^-2 sr^-1); the light's intensity is radiant intensity in "
+               "W/sr (a power P in W is 4π·I); the diffuse BRDF is albedo/π")
+
+
+_FLIPS = {"mirrored left-right": lambda a: a[:, ::-1], "upside down": lambda a: a[::-1, :],
+          "rotated half a turn": lambda a: a[::-1, ::-1], "transposed": lambda a: np.swapaxes(a, 0, 1)}
+
+
+def orientation(render: Callable, white: tuple[str, dict] | None) -> Row:
+    """A light upper left in front (+x right, +y up in the image): which flip of the analytic image
+    the render is nearest to."""
+    name = "orientation: an asymmetric light, left from right and up from down"
+    if white is None:
+        return Row(name, None, "no calibration material", "declare one (see units)")
+    scene = SCENE.model_copy(update={"lights": [PointLight(theta=50.0, phi=150.0)]})
+    img = render(white[0], white[1], scene)
+    want, inner = analytic_lambert(scene, ALBEDO), sphere_hits(scene).interior  # a centred sphere: flips keep it
+    inner = inner & _FLIPS["rotated half a turn"](inner) & _FLIPS["transposed"](inner)
+    errors = {"as expected": relative_rmse(want[inner], img[inner]),
+              **{k: relative_rmse(f(want)[inner], img[inner]) for k, f in _FLIPS.items()}}
+    best = min(errors, key=errors.get)
+    if best == "as expected":
+        return Row(name, True, f"{errors[best]:.2%} from the expected image")
+    return Row(name, False, f"the image is {best} ({errors[best]:.2%} from that, {errors['as expected']:.2%} from "
+               "the expected one)", "right-handed world, the camera looking down -z with +y up; image row 0 at the top, "
+               "column 0 at the left")
+
+
+def determinism(render: Callable, models: dict) -> Row:
+    name = "determinism: one seed, the same image"
+    for model, spec in models.items():
+        p = spec.complete({})
+        if not np.array_equal(render(model, p, SCENE), render(model, p, SCENE)):
+            return Row(name, False, f"model {model}: two renders with seed {SCENE.seed} differ",
+                       "pass the scene's seed to the renderer's sampler")
+    return Row(name, True, f"{len(models)} model(s), bit for bit")
+
+
+def images(render: Callable, models: dict) -> Row:
+    name = "images: RGB float, finite, lit, black background"
+    n = SCENE.resolution
+    for model, spec in models.items():
+        img = render(model, spec.complete({}), SCENE)
+        if img.shape != (n, n, 3) or not np.isfinite(img).all() or img.max() <= 0:
+            return Row(name, False, f"model {model}: shape {img.shape}, max {float(np.nanmax(img)):.3g}",
+                       f"write {n}x{n} RGB float pixels of the lit sphere")
+        if img[0, 0].max() != 0 or img[-1, -1].max() != 0:
+            return Row(name, False, f"model {model}: the background is not black",
+                       "no environment or ambient light; the sphere alone, lit by the scene's light")
+    return Row(name, True, f"{len(models)} model(s)")
+
+
+def lobes(render: Callable, models: dict) -> Row:
+    name = "lobes: diffuse + specular = the full image"
+    checked = 0
+    for model, spec in models.items():
+        if not spec.has_lobes or any(lobe.empty for lobe in spec.lobes.values()):
+            continue
+        p = spec.complete({})
+        full = render(model, p, SCENE)
+        err = relative_rmse(full, render(model, p, SCENE, "diffuse") + render(model, p, SCENE, "specular"))
+        checked += 1
+        if err >= LOBE_TOLERANCE:
+            return Row(name, False, f"model {model}: the lobes' sum is {err:.2e} from the full image",
+                       "each lobe's overrides must switch the other lobe off and nothing else")
+    return Row(name, True, f"{checked} model(s) with two lobes" if checked else "no model with two lobes")
+
+
+def precision(render: Callable, white: tuple[str, dict] | None) -> Row:
+    """Clipping at 1 (an 8-bit image) under a light bright enough to exceed it, and half floats."""
+    name = "precision: unclipped 32-bit float pixels"
+    if white is None:
+        return Row(name, None, "no calibration material", "declare one (see units)")
+    light = SCENE.point_lights[0]
+    scene = SCENE.model_copy(update={"lights": [light.model_copy(update={"intensity": light.intensity * BRIGHT})]})
+    img = np.asarray(render(white[0], white[1], scene), np.float32)
+    want = analytic_lambert(scene, ALBEDO)
+    top = float(img.max())
+    if float(want.max()) > 1.5 and top <= 1.0 + 1e-6:
+        return Row(name, False, f"no pixel above {top:.3g} where the brightest should be {float(want.max()):.3g}: "
+                   "clipped", "write float EXR, PFM or HDR (an 8-bit PNG clips highlights at 1)")
+    lit = img[img > 0]
+    if lit.size and np.array_equal(lit, lit.astype(np.float16).astype(np.float32)):
+        return Row(name, False, "every pixel is a half float", "write 32-bit float pixels (half floats round at 0.1 %)")
+    return Row(name, True, f"brightest {top:.3g} (expected {float(want.max()):.3g})")
+
+
+def run(render: Callable, models: dict, white: tuple[str, dict] | None) -> list[Row]:
+    """Every check; ``render(model, params, scene, lobe=None) -> image``."""
+    return [images(render, models), calibration(render, white), orientation(render, white),
+            determinism(render, models), lobes(render, models), precision(render, white)]

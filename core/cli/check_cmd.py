@@ -1,0 +1,53 @@
+"""`remap check ADAPTER [--model M]`: the adapter contract from the command line (`core.check`)."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..errors import ConfigError
+from . import options
+
+
+def parser() -> argparse.ArgumentParser:
+    p = options.Parser(prog="remap check", description="Check that an adapter keeps the conventions every "
+                       "renderer must share (units, orientation, determinism, lobes, precision); exit 0 only "
+                       "when every check passes.")
+    p.add_argument("adapter", metavar="ADAPTER", help="an installed adapter's name, or a renderer definition file")
+    p.add_argument("--model", action="append", help="check only this model (repeatable; default: every model)")
+    p.add_argument("--debug", action="store_true", help="show tracebacks")
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..check import run as run_checks
+    from ..plugins import collect_adapters
+
+    registry = collect_adapters()
+    name = registry.resolve(args.adapter, field_name="ADAPTER")
+    entry = registry.get(name, field_name="ADAPTER")
+    reason = entry.unavailable_reason()
+    if reason:
+        raise ConfigError(f"adapter {name!r} is unavailable: {reason}", field="ADAPTER")
+    unknown = [m for m in args.model or [] if m not in entry.models]
+    if unknown:
+        raise ConfigError(f"adapter {name!r} has no model {unknown[0]!r} (models: {', '.join(sorted(entry.models))})",
+                          field="--model")
+    models = {m: s for m, s in entry.models.items() if not args.model or m in args.model}
+    white = getattr(entry.factory, "calibration", None)
+    if white is not None:
+        white = (white[0], entry.models[white[0]].complete(white[1], file=f"adapter {name!r}", prefix="calibration.params"))
+    adapter = registry.create(name)
+    try:
+        rows = run_checks(lambda model, params, scene, lobe=None: adapter.render(model, params, scene, lobe), models,
+                          white)
+    finally:
+        adapter.close()
+    width = max(len(r.name) for r in rows)
+    print(f"remap check {name}: {len(models)} model(s)")
+    for r in rows:
+        mark = {True: "pass", False: "FAIL", None: "not run"}[r.passed]
+        print(f"  {mark:<7} {r.name:<{width}}  {r.detail}" + (f"\n  {'':<7} {'':<{width}}  fix: {r.fix}" if r.fix and
+                                                               not r.passed else ""))
+    failed = [r for r in rows if not r.passed]
+    print("all checks pass" if not failed else f"{len(failed)} of {len(rows)} checks do not pass")
+    return 0 if not failed else 1
