@@ -164,6 +164,19 @@ class RendererAlters(_Finding):
         return f"the renderer alters the fitted parameters: {self.detail}"
 
 
+class ImagePrecision(_Finding):
+    """A renderer's image cannot carry the fit: clipped highlights or 8-bit levels. The error is
+    then the file format's, not the model's."""
+
+    kind: Literal["image_precision"] = "image_precision"
+    side: Literal["source", "target"]
+    problem: str = Field(description="What the image shows, in words (a plateau at 1, 256 levels).")
+
+    def sentence(self) -> str:
+        return (f"the {self.side} renderer's image {self.problem}: the error is the image format's, not the "
+                "model's; have the renderer write float EXR, PFM or HDR")
+
+
 class ValidationSkipped(_Note):
     kind: Literal["validation_skipped"] = "validation_skipped"
     condition: str
@@ -267,7 +280,8 @@ class NoisePolished(_Note):
 
 
 Finding = Annotated[
-    Union[ErrorAboveThreshold, ModelMismatch, HeldOutAbove, CannotResolve, NoEffect, IllConditioned, NotAtMinimum,
+    Union[ErrorAboveThreshold, ModelMismatch, HeldOutAbove, CannotResolve, ImagePrecision, NoEffect, IllConditioned,
+          NotAtMinimum,
           PinnedOnBound, RendererAlters, ValidationSkipped, NothingFitted, StartKept, ChoiceTried, SchemeChosen, DeadParameters,
           JointRefined, PredictionNotRealised, NoisePolished],
     Field(discriminator="kind"),

@@ -68,3 +68,41 @@ def delta_e_itp(reference: np.ndarray, test: np.ndarray) -> float:
     lit = (np.asarray(reference).max(axis=-1) > 0) | (np.asarray(test).max(axis=-1) > 0)
     return float(dmap[lit].mean()) if lit.any() else 0.0
 
+
+
+CLIP_MIN_PIXELS, CLIP_MIN_FRACTION = 8, 0.002
+"""A plateau at the image's maximum this large is clipping: float renders of a highlight peak in
+one or a few pixels (an analytic sphere's symmetry ties at most four)."""
+
+
+def clipped_at(img: np.ndarray) -> tuple[float, int] | None:
+    """(value, pixels) when the image's largest values sit on one plateau at or below 1: an image
+    written with a ceiling (8-bit, or a display transform); else None."""
+    a = np.asarray(img, np.float32)
+    lit = a.max(axis=-1)
+    top = float(lit.max()) if lit.size else 0.0
+    if not 0.0 < top <= 1.0 + 1e-6:
+        return None
+    n = int(np.count_nonzero(lit >= top * (1 - 1e-6)))
+    return (top, n) if n >= max(CLIP_MIN_PIXELS, CLIP_MIN_FRACTION * np.count_nonzero(lit > 0)) else None
+
+
+def _srgb_decode(x: np.ndarray) -> np.ndarray:
+    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
+
+
+def _srgb_encode(x: np.ndarray) -> np.ndarray:
+    return np.where(x <= 0.0031308, x * 12.92, 1.055 * np.power(np.maximum(x, 0), 1 / 2.4) - 0.055)
+
+
+def eight_bit(img: np.ndarray) -> str:
+    """"sRGB" or "linear" when every value is one of 256 levels of that encoding (an 8-bit image),
+    else "". Only for an image with more than 256 lit values: fewer prove nothing."""
+    v = np.unique(np.asarray(img, np.float64).ravel())
+    if v.size > 256 or np.count_nonzero(np.asarray(img) > 0) <= 256 or v.max() > 1 + 1e-6:
+        return ""
+    if np.allclose(np.round(v * 255) / 255, v, atol=1e-6):
+        return "linear"
+    if np.allclose(_srgb_decode(np.round(_srgb_encode(v) * 255) / 255), v, atol=1e-6):
+        return "sRGB"
+    return ""

@@ -330,7 +330,8 @@ def _conclude(run: _Run, plan: Plan, state: _State, assessment: Assessment, join
     evidence = Evidence(error=state.err, noise_floor=floor, threshold=run.threshold,
                         resolve_limit=run.settings.resolve_limit, assessment=assessment, stages=run.stages,
                         cond_limit=run.tuning.cond_limit, renderer_notes=run.renders.notes(state.params),
-                        fitted=bool(run.free), trust_prediction=trust, validation=validation)
+                        fitted=bool(run.free), trust_prediction=trust, validation=validation,
+                        images=(run.scene.source, state.image))
     return EngineResult(
         params=state.params, fitted=list(run.free), scheme=run.settings.scheme, scheme_used=plan.scheme,
         relative_rmse=state.err, perceptual=delta_e_itp(run.scene.source, state.image), threshold=run.threshold,

@@ -13,6 +13,7 @@ from ..findings import (
     HeldOutAbove,
     HeldOutError,
     IllConditioned,
+    ImagePrecision,
     ModelMismatch,
     NoEffect,
     NotAtMinimum,
@@ -22,7 +23,7 @@ from ..findings import (
     ValidationSkipped,
     Verdict,
 )
-from ..metrics import beyond_noise
+from ..metrics import beyond_noise, clipped_at, eight_bit
 from .assess import Assessment
 from .results import StageResult, Validation
 
@@ -48,6 +49,8 @@ class Evidence:
     trust_prediction: bool = True
     """False when joint rounds already failed to realise what a joint step predicts."""
     validation: Validation = field(default_factory=Validation)
+    images: tuple = ()
+    """(source, target) at the final parameters: checked for clipping and 8-bit levels."""
 
     @property
     def beyond_noise(self) -> float:
@@ -92,11 +95,23 @@ def _fit_problems(ev: Evidence) -> list:
     return out
 
 
+def _image_problems(ev: Evidence) -> list:
+    """Images that cannot carry a fit (a ceiling at 1, 256 levels): then no error is the model's."""
+    out = []
+    for side, img in zip(("source", "target"), ev.images):
+        clip, levels = clipped_at(img), eight_bit(img)
+        words = ([f"clips at {clip[0]:.4g} ({clip[1]} pixels at exactly that value)"] if clip else []) + (
+            [f"has 256 {levels} levels (an 8-bit image)"] if levels else [])
+        if words:
+            out.append(ImagePrecision(side=side, problem=" and ".join(words)))
+    return out
+
+
 def judge(ev: Evidence, notes: list) -> Verdict:
     """The findings in order of weight, then ``notes`` (what the schedule did) and the dead parameters.
     With nothing fitted there is no fit to question: only the errors, and no talk of a mismatch."""
     errors = _errors(ev)
-    fit = _fit_problems(ev) if ev.fitted else []
+    fit = (_fit_problems(ev) if ev.fitted else []) + _image_problems(ev)
     scene = [p for p in errors if isinstance(p, ErrorAboveThreshold)]
     if ev.fitted and scene and not fit and all(s.converged for s in ev.stages):
         errors = [ModelMismatch(error=ev.error, threshold=ev.threshold, beyond_noise=ev.beyond_noise)

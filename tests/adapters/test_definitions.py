@@ -177,3 +177,30 @@ def test_remap_check_passes_the_built_in_and_shipped_adapters(adapter, needs):
     pytest.importorskip(needs)
     proc = _check(adapter)
     assert proc.returncode == 0 and "all checks pass" in proc.stdout, proc.stdout + proc.stderr
+
+
+def _remap_through(tmp_path, path):
+    import json
+    import subprocess
+
+    (tmp_path / "white.yaml").write_text("adapter: mitsuba\nmodel: diffuse\nparams: {reflectance: 0.8}\n")
+    (tmp_path / "bright.yaml").write_text("lights: [{type: point, intensity: 300.0}]\nresolution: 32\nspp: 4\n")
+    proc = subprocess.run([sys.executable, "-m", "brdfremap.core.cli", "--adapter", str(path), "--model", "lambert",
+                           "--source", str(tmp_path / "white.yaml"), "--scene", str(tmp_path / "bright.yaml"),
+                           "--out", str(tmp_path / "out"), "--validate", "none", "--quiet"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    return json.loads((tmp_path / "out" / "result.json").read_text())
+
+
+@pytest.mark.parametrize("extra, output, words", [(["--clip"], "exr", "clips at 1"),
+                                                  ([], "png", "has 256 sRGB levels")])
+def test_a_clipped_or_8_bit_image_is_named_not_called_a_model_mismatch(tmp_path, mitsuba_adapter, extra, output,
+                                                                       words):
+    """Item 4: an 8-bit PNG clips highlights at 1 and the fit reported 90 % as "the closest this
+    target model gets"."""
+    r = _remap_through(tmp_path, _definition(tmp_path, extra_args=extra, output=output))
+    kinds = [f["kind"] for f in r["findings"] if f["severity"] == "unreliable"]
+    assert r["verdict"] == "unreliable" and "image_precision" in kinds and "model_mismatch" not in kinds, kinds
+    msg = next(f["message"] for f in r["findings"] if f["kind"] == "image_precision")
+    assert "target renderer's image" in msg and words in msg and "float EXR" in msg, msg

@@ -55,8 +55,12 @@ def main() -> None:
 
     path = args.output + (".png" if args.misname else "")
     h, w, c = pixels.shape
+    kind = args.pixels if path.endswith(".exr") else "float"
+    if path.endswith(".png"):  # 8-bit sRGB, as a renderer's PNG output is
+        x = np.clip(pixels, 0.0, 1.0)
+        pixels, kind = np.where(x <= 0.0031308, x * 12.92, 1.055 * x ** (1 / 2.4) - 0.055), "uint8"
     out = oiio.ImageOutput.create(path)
-    out.open(path, oiio.ImageSpec(w, h, c, args.pixels if path.endswith(".exr") else "float"))
+    out.open(path, oiio.ImageSpec(w, h, c, kind))
     out.write_image(np.ascontiguousarray(pixels, np.float32))
     out.close()
 
