@@ -7,6 +7,7 @@ reads the image it wrote. A persistent renderer is started once and answers JSON
 from __future__ import annotations
 
 import hashlib
+import itertools
 import importlib.util
 import json
 import os
@@ -15,6 +16,7 @@ import signal
 import subprocess
 import sys
 from pathlib import Path
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -27,7 +29,7 @@ from brdfremap.core.scratch import scratch_dir
 from brdfremap.core.workerproc import JsonLinesWorker, die_with_parent
 
 from .definition import RendererDef, load_definition
-from .template import scene_vars, substitute
+from .template import sample_vars, scene_vars, substitute
 
 
 def which(exe: str) -> str | None:
@@ -95,7 +97,8 @@ class SubprocessAdapter(Adapter):
             argv[0] = which(argv[0]) or argv[0]
             self.worker = JsonLinesWorker(argv, name=f"renderer {d.name!r}", env=self.env, cwd=self.here,
                                           start_timeout=d.start_timeout, request_timeout=d.timeout)
-        self.count = 0
+        self._ids = itertools.count(1)
+        self._running: set[subprocess.Popen] = set()
         self.warned_depth = False
 
     def describe(self) -> dict[str, Any]:
@@ -116,8 +119,7 @@ class SubprocessAdapter(Adapter):
     def render(self, model: str, params: dict[str, Value], scene: ProbeScene, lobe: str | None = None) -> np.ndarray:
         d = self.definition
         p = self.models[model].with_lobe(params, lobe)
-        self.count += 1
-        job = self.work / f"r{self.count}"
+        job = self.work / f"r{next(self._ids)}"
         try:
             job.mkdir()
             output = job / f"image.{d.output_format}"
@@ -140,6 +142,32 @@ class SubprocessAdapter(Adapter):
         finally:
             shutil.rmtree(job, ignore_errors=True)
 
+    def render_batch(self, requests):
+        """One-shot renders run ``jobs`` at once (a renderer waiting on its files or its start-up
+        leaves the cores idle); a persistent renderer answers one at a time."""
+        jobs = min(len(requests), self.definition.jobs or os.cpu_count() or 1)
+        if self.worker is not None or jobs < 2:
+            return super().render_batch(requests)
+        pool = ThreadPoolExecutor(max_workers=jobs, thread_name_prefix=f"render-{self.definition.name}")
+        try:
+            return list(pool.map(lambda r: self.render(*r), requests))
+        except BaseException:  # a failed render, Ctrl-C: the others' process groups go too
+            for proc in list(self._running):
+                _kill_group(proc)
+            raise
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+    def write_native(self, model: str, params: dict[str, Value], out_dir: Path) -> list[Path]:
+        """The model's `native:` text with the fitted values, when the definition gives one."""
+        native = self.definition.models[model].native
+        if native is None:
+            return []
+        values = {"model": model, **{f"p_{k}": self._value(v) for k, v in params.items()}}
+        path = Path(out_dir) / native.file
+        path.write_text(substitute(native.text, values, f"models.{model}.native.text"), encoding="utf-8")
+        return [path]
+
     def _request_files(self, model: str, p: dict[str, Value], scene: ProbeScene, job: Path,
                        output: Path) -> dict[str, str]:
         """Write the scene and parameters (and the filled scene template) for one render; return
@@ -151,7 +179,7 @@ class SubprocessAdapter(Adapter):
             k: list(v) if isinstance(v, tuple) else v for k, v in p.items()}}, indent=1))
         values = {"scene_json": str(scene_json), "params_json": str(params_json), "output": str(output),
                   "model": model, "width": str(scene.resolution), "height": str(scene.resolution),
-                  "spp": str(scene.spp), "seed": str(scene.seed), "python": sys.executable, "here": self.here}
+                  **sample_vars(scene.spp), "seed": str(scene.seed), "python": sys.executable, "here": self.here}
         if self.template is not None:
             tvars = {**scene_vars(scene), "model": model, **{f"p_{k}": self._value(v) for k, v in p.items()}}
             tvars.update({k: substitute(text, tvars, f"models.{model}.template_vars.{k}")
@@ -182,6 +210,7 @@ class SubprocessAdapter(Adapter):
                                     preexec_fn=die_with_parent)
         except OSError as exc:
             raise self._fail(model, p, f"cannot run {argv[0]!r}: {exc}") from None
+        self._running.add(proc)
         try:
             out, err = proc.communicate(timeout=self.definition.timeout)
         except subprocess.TimeoutExpired:
@@ -193,6 +222,8 @@ class SubprocessAdapter(Adapter):
             _kill_group(proc)
             proc.communicate()
             raise
+        finally:
+            self._running.discard(proc)
         if proc.returncode != 0:
             raise self._fail(model, p, f"exit code {proc.returncode}", err or out)
         return err or out

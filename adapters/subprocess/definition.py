@@ -10,10 +10,26 @@ from brdfremap.core.configio import load_yaml_model
 from brdfremap.core.schemas import LobeSpec, ModelSpec, ParamSpec
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-PLACEHOLDERS = ("scene_json", "params_json", "output", "model", "width", "height", "spp", "seed", "scene_file",
-                "python", "here", "defines")
+PLACEHOLDERS = ("scene_json", "params_json", "output", "model", "width", "height", "spp", "spp_sqrt", "spp_log2",
+                "seed", "scene_file", "python", "here", "defines")
 _TOKEN = re.compile(r"(?<!\{)\{([a-z_][a-z0-9_]*)\}(?!\})")
 """A placeholder in a command argument or a define (``{{``/``}}`` are literal braces)."""
+
+
+class Native(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    file: str = Field(description="The file name written beside result.json, e.g. material.xml.")
+    text: str = Field(description="Its text: {p_<parameter>} (RGB through rgb_format) and {model} are filled.")
+
+    @field_validator("file")
+    @classmethod
+    def _plain(cls, name: str) -> str:
+        reserved = ("result.json", "source.exr", "target.exr", "source.png", "target.png", "error.png")
+        if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9._-]*", name) or name in reserved or ".." in name:
+            raise ValueError(f"{name!r} must be a plain file name (letters, digits, . _ -), not one of "
+                             f"{', '.join(reserved)}")
+        return name
 
 
 class ModelDef(BaseModel):
@@ -25,6 +41,8 @@ class ModelDef(BaseModel):
         default_factory=dict,
         description="Per lobe, the parameter values that isolate it ({specular: 0}); or the long form "
                     "{overrides: {...}, params: [...]}; or 'empty'.")
+    native: "Native | None" = Field(None, description="The material in the renderer's own form, written beside "
+                                                       "each result with the fitted values.")
     template_vars: dict[str, str] = Field(default_factory=dict,
                                           description="Extra text substituted into the scene template for this "
                                                       "model, e.g. its <bsdf> element; it may use the scene's "
@@ -58,6 +76,8 @@ class RendererDef(BaseModel):
     scene_template: str | None = Field(None, description="A file (relative to this YAML) whose placeholders are "
                                        "filled per render and passed as {scene_file}.")
     env: dict[str, str] = Field(default_factory=dict, description="Extra environment variables.")
+    jobs: int | None = Field(None, ge=1, le=256, description="One-shot renders run at once (a Jacobian's, the "
+                                                              "validation's); default: this machine's cores.")
     requires: list[str] = Field(default_factory=list,
                                 description="Executables or Python modules that must exist (`py:module`).")
     models: dict[str, ModelDef]

@@ -8,6 +8,7 @@ placeholder is checked when the definition is loaded, naming the file and line."
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 
@@ -18,10 +19,16 @@ _PIECE = re.compile(r"\{\{|\}\}|\{([a-z_][a-z0-9_]*)\}")
 """A literal brace pair or a placeholder. Anything else, lone braces included, is text."""
 
 
+def sample_vars(spp: int) -> dict[str, str]:
+    """The samples per pixel, and as a renderer may take them: the side of a square grid
+    (``spp_sqrt``, rounded up) or a power of two's exponent (``spp_log2``, rounded up)."""
+    return {"spp": str(spp), "spp_sqrt": str(math.isqrt(spp - 1) + 1), "spp_log2": str((spp - 1).bit_length())}
+
+
 def scene_vars(scene: ProbeScene) -> dict[str, str]:
     """The probe scene's placeholders: sizes, samples, the camera, the sphere and its one point light."""
     cam, light, sph = scene.camera, scene.point_lights[0], scene.sphere
-    out = {"width": scene.resolution, "height": scene.resolution, "spp": scene.spp, "seed": scene.seed,
+    out = {"width": scene.resolution, "height": scene.resolution, "seed": scene.seed, **sample_vars(scene.spp),
            "fov": cam.fov, "sphere_radius": sph.radius, "light_intensity": light.intensity}
     for prefix, vec in (("camera", cam.position), ("target", cam.target), ("up", cam.up),
                         ("light", light.position), ("sphere", sph.center)):
@@ -75,6 +82,8 @@ def check_definition(path: Path, definition) -> None:
                               file=str(path), field="scene_template") from None
     for name, m in definition.models.items():
         params = {f"p_{p.name}" for p in m.parameters}
+        if m.native is not None:
+            check(m.native.text, params | {"model"}, str(path), f"models.{name}.native.text")
         inner = set(SCENE_VARS) | params
         for key, text in m.template_vars.items():
             check(text, inner, str(path), f"models.{name}.template_vars.{key}")

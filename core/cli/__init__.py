@@ -55,15 +55,15 @@ def main(argv: list[str] | None = None) -> int:
         status = interrupt.exit_status()
         print("remap: interrupted" if status == 130 else "remap: terminated", file=sys.stderr)
         return status
+    except BrokenPipeError:  # `remap ... | head`: the reader left; results are already written
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except OSError as exc:  # stdout or stderr gone (`remap ... > /dev/full`): results are already written
         try:
             print(f"remap: error: cannot write the output: {exc.strerror or exc}", file=sys.stderr)
         except OSError:
             pass
         return EXIT_USAGE
-    except BrokenPipeError:  # `remap ... | head`: the reader left; results are already written
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 0
 
 
 if __name__ == "__main__":

@@ -13,20 +13,34 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
+from ..schemas import format_value
 from . import options
 
 
 def adapters_parser() -> argparse.ArgumentParser:
-    p = options.Parser(prog="remap adapters", description="List adapters and their models.")
+    p = options.Parser(prog="remap adapters", description="List adapters and their models, each parameter "
+                       "with its bounds.")
+    p.add_argument("adapter", nargs="*", metavar="ADAPTER",
+                   help="only these: installed names or renderer definition files (default: every installed one)")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     return p
+
+
+def _parameter(p) -> str:
+    """One parameter as `remap adapters` shows it: name, kind, bounds or choices, default."""
+    if p.kind == "choice":
+        return f"{p.name} ({' | '.join(map(str, p.choices))}; default {p.default})"
+    scale = ", log" if p.scale == "log" else ""
+    held = ", held" if not p.fit else ""
+    return f"{p.name} ({p.kind} [{p.lower:g}, {p.upper:g}]{scale}{held}; default {format_value(p.default)})"
 
 
 def adapters(args: argparse.Namespace) -> int:
     from ..plugins import collect_adapters
 
     registry = collect_adapters()
-    for name in registry.names():
+    names = [registry.resolve(a, field_name="ADAPTER") for a in args.adapter] or registry.names()
+    for name in names:
         entry = registry.get(name)
         reason = entry.unavailable_reason()
         print(f"{name}  [{entry.plugin}]  {getattr(entry.factory, 'summary', '')}")
@@ -41,10 +55,11 @@ def adapters(args: argparse.Namespace) -> int:
             for k, v in env.items():
                 print(f"  {k}: {v}")
         for mname, spec in sorted(entry.models.items()):
-            params = ", ".join(p.name for p in spec.parameters)
             lobes = "lobes" if spec.has_lobes else "no lobe isolation"
-            print(f"  model {mname}: {params}  ({lobes})")
-    for plugin, err in sorted(registry.broken.items()):
+            print(f"  model {mname} ({lobes}):")
+            for p in spec.parameters:
+                print(f"    {_parameter(p)}")
+    for plugin, err in sorted(registry.broken.items() if not args.adapter else ()):
         print(f"broken plugin {plugin}: {err}")
     return 0
 

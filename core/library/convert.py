@@ -14,16 +14,17 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..atomic import write_json_atomic
+from ..atomic import write_bytes_atomic, write_json_atomic
 from ..errors import ConfigError, RemapError
-from ..execute import AdapterPool
+from ..execute import IMAGES, AdapterPool
 from ..executors import Workers
 from ..job import Job, Target, Where, resolve
 from ..plugins import AdapterRegistry
 from ..runner import Done, Runner, Task
 from ..scene import ProbeScene
 from ..settings import Settings
-from ..store import Store, owned
+from ..report import read_report
+from ..store import RESULT, Store, owned
 from .formats import Converted, Entry, Formats
 
 
@@ -36,6 +37,7 @@ class Destination:
     @classmethod
     def parse(cls, text: str, registry: AdapterRegistry) -> "Destination":
         adapter, _, model = text.partition(":")
+        adapter = registry.resolve(adapter, field_name="--to")  # a name, or a renderer definition file
         entry = registry.get(adapter, field_name="--to")
         if model and model not in entry.models:
             raise ConfigError(f"adapter {adapter!r} has no model {model!r} (models: {', '.join(sorted(entry.models))})",
@@ -152,7 +154,8 @@ def convert(entries: list[Entry], dest: Destination, out: str | Path, registry: 
 def _write_libraries(result: Conversion, folder: Path, formats: Formats) -> None:
     ok = [i for i in result.items if i.done is not None and i.done.report is not None]
     models = {i.model for i in ok}
-    for writer in formats.writers_for(result.destination.adapter, models):
+    writers = formats.writers_for(result.destination.adapter, models) or [NativeFiles(result.destination.adapter)]
+    for writer in writers:
         mine = [Converted(i.entry.name, i.model, dict(i.done.report.params), folder / "materials" / i.slot)
                 for i in ok if not writer.models or i.model in writer.models]
         if not mine:
@@ -161,6 +164,30 @@ def _write_libraries(result: Conversion, folder: Path, formats: Formats) -> None
             result.libraries += writer.write(folder, mine)
         except RemapError as exc:
             result.library_notes.append(f"{writer.name}: not written: {exc}")
+
+
+@dataclass
+class NativeFiles:
+    """The library of a target no writer knows (a renderer defined in YAML): each material's
+    native files (its definition's `native:`), gathered under `native/<slot>/`, the slot being
+    the material's name made safe and unique as in `materials/`."""
+
+    adapter: str
+    name: str = "native files"
+    models: tuple[str, ...] = ()
+
+    def write(self, folder: Path, items: list[Converted]) -> list[Path]:
+        """The folder `native/` (one library: a folder per material), when any material has one."""
+        out = []
+        for item in items:
+            report = read_report(item.folder / RESULT)
+            natives = [f.name for f in report.files if f.name not in IMAGES]
+            dest = folder / "native" / item.folder.name  # the material's slot: its name, made safe and unique
+            dest.mkdir(parents=True, exist_ok=True)
+            for name in natives:
+                data = (item.folder / name).read_bytes()
+                out.append(write_bytes_atomic(dest / name, data))
+        return [folder / "native"] if out else []
 
 
 def _line(done: Done, i: int, n: int) -> str:

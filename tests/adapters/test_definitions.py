@@ -172,7 +172,9 @@ SHIPPED = Path(__file__).resolve().parents[2] / "configs" / "renderers"
 
 @pytest.mark.parametrize("adapter, needs", [("mitsuba", "mitsuba"), ("cycles", "bpy"),
                                             (str(SHIPPED / "mitsuba-cli.yaml"), "mitsuba"),
-                                            (str(SHIPPED / "cycles-subprocess.yaml"), "bpy")])
+                                            (str(SHIPPED / "cycles-subprocess.yaml"), "bpy"),
+                                            (str(SHIPPED.parents[1] / "examples" / "renderer" / "my-renderer.yaml"),
+                                             "mitsuba")])
 def test_remap_check_passes_the_built_in_and_shipped_adapters(adapter, needs):
     pytest.importorskip(needs)
     proc = _check(adapter)
@@ -204,3 +206,90 @@ def test_a_clipped_or_8_bit_image_is_named_not_called_a_model_mismatch(tmp_path,
     assert r["verdict"] == "unreliable" and "image_precision" in kinds and "model_mismatch" not in kinds, kinds
     msg = next(f["message"] for f in r["findings"] if f["kind"] == "image_precision")
     assert "target renderer's image" in msg and words in msg and "float EXR" in msg, msg
+
+
+def test_samples_can_be_written_as_a_grid_side_or_a_power_of_two(tmp_path):
+    """Item 8: a renderer taking √spp (a stratified grid) or a depth got the same image at 4x samples."""
+    copy = tmp_path / "filled.brace"
+    path = _definition(tmp_path, template=TEMPLATE + "samples = {spp} grid = {spp_sqrt} depth = {spp_log2}\n",
+                       extra_args=["--copy-scene", str(copy)])
+    adapter = adapter_class(path)()
+    try:
+        params = adapter.models["lambert"].complete({})
+        for spp, grid, depth in ((16, 4, 4), (17, 5, 5), (64, 8, 6)):
+            adapter.render("lambert", params, SCENE.with_(spp=spp))
+            assert f"samples = {spp} grid = {grid} depth = {depth}" in copy.read_text()
+    finally:
+        adapter.close()
+
+
+def test_one_shot_renders_of_a_batch_run_at_once(tmp_path):
+    """Item 9: a Jacobian's renders ran one after the other while the renderer waited. With
+    `jobs: 4`, four renders of a renderer that waits overlap (their logged intervals)."""
+    log = tmp_path / "times.log"
+    path = _definition(tmp_path, extra_args=["--sleep", "0.5", "--log", str(log)])
+    path.write_text(path.read_text() + "jobs: 4\n")
+    adapter = adapter_class(path)()
+    try:
+        p = adapter.models["lambert"].complete({})
+        images = adapter.render_batch([("lambert", {**p, "albedo": (a, a, a)}, SCENE, None) for a in (0.2, 0.4, 0.6, 0.8)])
+    finally:
+        adapter.close()
+    assert [float(img.max()) for img in images] == sorted(float(img.max()) for img in images)  # in request order
+    spans = [tuple(map(float, line.split())) for line in log.read_text().splitlines()]
+    assert len(spans) == 4 and max(s for s, _ in spans) < min(e for _, e in spans)  # all four under way at once
+
+
+def test_a_native_template_writes_the_fitted_material_beside_the_result(tmp_path, mitsuba_adapter):
+    """Item 10: Mitsuba gets material.xml, Cycles material.blend; a YAML renderer got only numbers."""
+    path = _definition(tmp_path)
+    path.write_text(path.read_text() + "    native: {file: material.brace, text: 'material {{ albedo = {p_albedo} }} "
+                                       "# {model}'}\n")
+    r = _remap_through(tmp_path, path)
+    text = (tmp_path / "out" / "material.brace").read_text()
+    fitted = r["params"]["albedo"]
+    assert text == f"material {{ albedo = {fitted[0]:.9g} {fitted[1]:.9g} {fitted[2]:.9g} }} # lambert", text
+    assert "material.brace" in [f["name"] for f in r["files"]]
+
+
+@pytest.mark.parametrize("native, words", [("{file: ../x, text: a}", "plain file name"),
+                                           ("{file: result.json, text: a}", "plain file name"),
+                                           ("{file: m.txt, text: '{p_colour}'}", "models.lambert.native.text")])
+def test_a_bad_native_template_is_refused_when_loaded(tmp_path, native, words):
+    path = _definition(tmp_path)
+    path.write_text(path.read_text() + f"    native: {native}\n")
+    with pytest.raises(ConfigError) as exc:
+        adapter_class(path)
+    assert words in str(exc.value) and "brace.yaml" in str(exc.value)
+
+
+def test_remap_adapters_shows_a_definition_given_by_path_with_bounds(tmp_path):
+    """Item 11."""
+    import subprocess
+
+    path = _definition(tmp_path)
+    proc = subprocess.run([sys.executable, "-m", "brdfremap.core.cli", "adapters", str(path)], capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.startswith("brace  [file ") and "albedo (rgb [0, 1]; default [0.5, 0.5, 0.5])" in proc.stdout
+    assert "cycles" not in proc.stdout
+
+
+def test_convert_to_a_definition_file_gathers_each_materials_native_file(tmp_path, mitsuba_adapter):
+    """Item 10's library: a target no library writer knows gets each material's native file."""
+    import subprocess
+
+    path = _definition(tmp_path)
+    path.write_text(path.read_text() + "    native: {file: material.brace, text: 'material {{ albedo = {p_albedo} }}'}\n")
+    lib = tmp_path / "lib"
+    lib.mkdir()
+    (lib / "white.yaml").write_text("adapter: mitsuba\nmodel: diffuse\nparams: {reflectance: 0.8}\n")
+    proc = subprocess.run([sys.executable, "-m", "brdfremap.core.cli", "convert", str(lib), "--to", f"{path}:lambert",
+                           "--out", str(tmp_path / "out"), "--resolution", "32", "--spp", "4", "--validate", "none"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert f"libraries   {tmp_path / 'out'}/native" in proc.stdout
+    (written,) = (tmp_path / "out" / "native").glob("*/material.brace")
+    text = written.read_text()
+    values = [float(v) for v in text.split("=")[1].split("}")[0].split()]
+    assert text.startswith("material { albedo = ") and all(abs(v / 0.8 - 1) < 0.05 for v in values), text

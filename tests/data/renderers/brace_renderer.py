@@ -44,7 +44,16 @@ def main() -> None:
     p.add_argument("--scale", type=float, default=1.0)
     p.add_argument("--mirror", action="store_true")
     p.add_argument("--clip", action="store_true")
+    p.add_argument("--copy-scene", help="also copy the filled scene file here (what the tests read back)")
+    p.add_argument("--log", help="append this render's start and end times here (concurrency tests)")
+    p.add_argument("--sleep", type=float, default=0.0, help="seconds to wait, as a renderer on its I/O does")
     args = p.parse_args()
+    import time
+
+    t0 = time.time()
+    time.sleep(args.sleep)
+    if args.copy_scene:
+        Path(args.copy_scene).write_text(Path(args.scene_file).read_text())
     doc = json.loads(Path(args.scene_json).read_text())
     pixels = image(doc, np.asarray(albedo(Path(args.scene_file).read_text()), np.float32)) * args.scale
     if args.mirror:
@@ -63,6 +72,9 @@ def main() -> None:
     out.open(path, oiio.ImageSpec(w, h, c, kind))
     out.write_image(np.ascontiguousarray(pixels, np.float32))
     out.close()
+    if args.log:
+        with open(args.log, "a") as f:
+            f.write(f"{t0} {time.time()}\n")
 
 
 if __name__ == "__main__":
