@@ -14,7 +14,7 @@ from typing import Callable
 
 import numpy as np
 
-from .metrics import relative_rmse
+from .metrics import eight_bit, relative_rmse
 from .scene import PointLight, ProbeScene
 from .testing import analytic_lambert, sphere_hits
 
@@ -50,20 +50,27 @@ def calibration(render: Callable, white: tuple[str, dict] | None) -> Row:
         return Row(name, None, "no calibration material", "declare a white diffuse material of albedo 0.8 "
                    "(a definition's `calibration: {model: ..., params: {...}}`)")
     img = render(white[0], white[1], CALIBRATION)
-    inner = sphere_hits(CALIBRATION).interior
-    want = analytic_lambert(CALIBRATION, ALBEDO)[inner]
-    err = relative_rmse(want, img[inner])
+    inner = _symmetric(sphere_hits(CALIBRATION).interior)
+    full = analytic_lambert(CALIBRATION, ALBEDO)
+    # Judged on the image as it would be the right way round: a mirrored image is orientation's failure.
+    err = min(relative_rmse(f(full)[inner], img[inner]) for f in (lambda a: a, *_FLIPS.values()))
     if err < CALIBRATION_TOLERANCE:
         return Row(name, True, f"{err:.2%} from the analytic radiance")
-    ratio = float(img[inner].sum() / max(want.sum(), 1e-30))
+    ratio = float(img[inner].sum() / max(full[inner].sum(), 1e-30))
     known = _factor(ratio)
     why = f"{err:.2%} off; the image is {ratio:.4g}x the analytic radiance" + (f" (a factor of {known})" if known else "")
     return Row(name, False, why, "pixels are radiance (W m^-2 sr^-1); the light's intensity is radiant intensity in "
-               "W/sr (a power P in W is 4π·I); the diffuse BRDF is albedo/π")
+               "W/sr (a power P in W is 4π·I); the diffuse BRDF is albedo/π; no tone mapping or 8-bit output "
+               "(see precision)")
 
 
 _FLIPS = {"mirrored left-right": lambda a: a[:, ::-1], "upside down": lambda a: a[::-1, :],
           "rotated half a turn": lambda a: a[::-1, ::-1], "transposed": lambda a: np.swapaxes(a, 0, 1)}
+
+
+def _symmetric(mask: np.ndarray) -> np.ndarray:
+    """The pixels inside the sphere in every flip of the image (a centred sphere: nearly all)."""
+    return mask & _FLIPS["rotated half a turn"](mask) & _FLIPS["transposed"](mask)
 
 
 def orientation(render: Callable, white: tuple[str, dict] | None) -> Row:
@@ -74,13 +81,14 @@ def orientation(render: Callable, white: tuple[str, dict] | None) -> Row:
         return Row(name, None, "no calibration material", "declare one (see units)")
     scene = SCENE.model_copy(update={"lights": [PointLight(theta=50.0, phi=150.0)]})
     img = render(white[0], white[1], scene)
-    want, inner = analytic_lambert(scene, ALBEDO), sphere_hits(scene).interior  # a centred sphere: flips keep it
-    inner = inner & _FLIPS["rotated half a turn"](inner) & _FLIPS["transposed"](inner)
+    want, inner = analytic_lambert(scene, ALBEDO), _symmetric(sphere_hits(scene).interior)
+    # Compared at the same total, so that a scale error (units' failure) does not hide the shape.
+    img = img * float(want[inner].sum() / max(float(img[inner].sum()), 1e-30))
     errors = {"as expected": relative_rmse(want[inner], img[inner]),
               **{k: relative_rmse(f(want)[inner], img[inner]) for k, f in _FLIPS.items()}}
     best = min(errors, key=errors.get)
     if best == "as expected":
-        return Row(name, True, f"{errors[best]:.2%} from the expected image")
+        return Row(name, True, f"{errors[best]:.2%} from the expected image (scaled to its total)")
     return Row(name, False, f"the image is {best} ({errors[best]:.2%} from that, {errors['as expected']:.2%} from "
                "the expected one)", "right-handed world, the camera looking down -z with +y up; image row 0 at the top, "
                "column 0 at the left")
@@ -122,7 +130,8 @@ def lobes(render: Callable, models: dict) -> Row:
         checked += 1
         if err >= LOBE_TOLERANCE:
             return Row(name, False, f"model {model}: the lobes' sum is {err:.2e} from the full image",
-                       "each lobe's overrides must switch the other lobe off and nothing else")
+                       "each lobe's overrides must switch the other lobe off and nothing else; if precision fails "
+                       "too, fix that first (rounding breaks the sum)")
     return Row(name, True, f"{checked} model(s) with two lobes" if checked else "no model with two lobes")
 
 
@@ -139,6 +148,10 @@ def precision(render: Callable, white: tuple[str, dict] | None) -> Row:
     if float(want.max()) > 1.5 and top <= 1.0 + 1e-6:
         return Row(name, False, f"no pixel above {top:.3g} where the brightest should be {float(want.max()):.3g}: "
                    "clipped", "write float EXR, PFM or HDR (an 8-bit PNG clips highlights at 1)")
+    levels = eight_bit(np.minimum(render(white[0], white[1], SCENE), 1.0))
+    if levels:
+        return Row(name, False, f"every pixel is one of 256 {levels} levels: an 8-bit image",
+                   "write float EXR, PFM or HDR")
     lit = img[img > 0]
     if lit.size and np.array_equal(lit, lit.astype(np.float16).astype(np.float32)):
         return Row(name, False, "every pixel is a half float", "write 32-bit float pixels (half floats round at 0.1 %)")

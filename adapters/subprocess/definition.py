@@ -160,12 +160,11 @@ def _refuse_ambiguous(model: str, numeric: list[str], short: dict[str, dict]) ->
     left = [p for p in numeric if p not in short["diffuse"] and p not in short["specular"]]
     if not left:
         return
-    spec = list(short["diffuse"]) + left
     raise ValueError(
-        f"{model}.lobes: the short form leaves {', '.join(left)} to neither lobe; say which lobe's stage fits "
-        f"each, in the long form, e.g. diffuse: {{overrides: {_flow(short['diffuse'])}, params: "
-        f"[{', '.join(short['specular'])}]}}, specular: {{overrides: {_flow(short['specular'])}, params: "
-        f"[{', '.join(spec)}]}} (leave a parameter both lobes share out of both)")
+        f"{model}.lobes: the short form leaves {', '.join(left)} to neither lobe; write the long form and put each "
+        f"in the params of the lobe whose stage should fit it, or in neither when both lobes share it (a colour), "
+        f"e.g. diffuse: {{overrides: {_flow(short['diffuse'])}, params: [{', '.join(short['specular'])}]}}, "
+        f"specular: {{overrides: {_flow(short['specular'])}, params: [{', '.join(short['diffuse'])}, ...]}}")
 
 
 def _flow(values: dict) -> str:

@@ -61,13 +61,23 @@ def substitute(text: str, values: dict[str, str], where: str) -> str:
     return _PIECE.sub(one, text)
 
 
-def check(text: str, known: set[str], file: str, what: str) -> None:
-    """Every placeholder of ``text`` is in ``known``, else one line naming the file and line."""
+_NEAR = re.compile(r"(?<!\{)\{([A-Za-z_][A-Za-z0-9_]*)\}(?!\})")
+
+
+def check(text: str, known: set[str], file: str, what: str, lines: bool = True) -> None:
+    """Every placeholder of ``text`` is in ``known``, else one line naming the file and, for a file
+    of its own (``lines``), the line; a near miss in capitals (``{P_albedo}``) is named too."""
     for name, line in placeholders(text):
         if name not in known:
             shown = ", ".join(sorted(known))
-            raise ConfigError(f"line {line}: unknown placeholder {{{name}}} in {what} (known here: {shown}; "
+            where = f"line {line}: " if lines else ""
+            raise ConfigError(f"{where}unknown placeholder {{{name}}} in {what} (known here: {shown}; "
                               "a literal brace is written {{ or }})", file=file)
+    for m in _NEAR.finditer(text):
+        if m.group(1) != m.group(1).lower() and m.group(1).lower() in known:
+            where = f"line {text.count(chr(10), 0, m.start()) + 1}: " if lines else ""
+            raise ConfigError(f"{where}{{{m.group(1)}}} in {what} is not a placeholder (they are lower case): "
+                              f"write {{{m.group(1).lower()}}}", file=file)
 
 
 def check_definition(path: Path, definition) -> None:
@@ -83,10 +93,10 @@ def check_definition(path: Path, definition) -> None:
     for name, m in definition.models.items():
         params = {f"p_{p.name}" for p in m.parameters}
         if m.native is not None:
-            check(m.native.text, params | {"model"}, str(path), f"models.{name}.native.text")
+            check(m.native.text, params | {"model"}, str(path), f"models.{name}.native.text", lines=False)
         inner = set(SCENE_VARS) | params
         for key, text in m.template_vars.items():
-            check(text, inner, str(path), f"models.{name}.template_vars.{key}")
+            check(text, inner, str(path), f"models.{name}.template_vars.{key}", lines=False)
         if template is not None:
             check(template, inner | set(m.template_vars), str(path.parent / definition.scene_template),
                   f"the scene template (model {name!r})")

@@ -105,7 +105,8 @@ def _held_out(r: Report) -> str:
             levels.setdefault((c.resolution, c.spp), []).append(c.label)
     where = "; ".join(f"{', '.join(v) if len(levels) > 1 else 'each'} at {res} px {spp} spp"
                       for (res, spp), v in levels.items())
-    return ", ".join(parts) + f"   ({where}; seeds the fit never saw)"
+    skipped = "".join(f"; {k} skipped: {v}" for k, v in r.validation_skipped.items())
+    return ", ".join(parts) + f"   ({where}; seeds the fit never saw{skipped})"
 
 
 def _verdict(r: Report) -> str:

@@ -55,7 +55,7 @@ def adapters(args: argparse.Namespace) -> int:
             for k, v in env.items():
                 print(f"  {k}: {v}")
         for mname, spec in sorted(entry.models.items()):
-            lobes = "lobes" if spec.has_lobes else "no lobe isolation"
+            lobes = "each lobe renders alone" if spec.has_lobes else "no lobe isolation"
             print(f"  model {mname} ({lobes}):")
             for p in spec.parameters:
                 print(f"    {_parameter(p)}")

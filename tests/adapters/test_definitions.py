@@ -74,7 +74,16 @@ def test_a_template_var_naming_another_models_parameter_is_refused_when_loaded(t
     path = _definition(tmp_path, material="albedo = {p_colour}")
     with pytest.raises(ConfigError) as exc:
         adapter_class(path)
-    assert "models.lambert.template_vars.material" in str(exc.value) and "{p_colour}" in str(exc.value)
+    msg = str(exc.value)
+    assert "models.lambert.template_vars.material" in msg and "{p_colour}" in msg and "line 1" not in msg, msg
+
+
+def test_a_placeholder_in_capitals_is_named_not_sent_as_text(tmp_path):
+    """The new-user trial's {P_albedo} reached the renderer literally and crashed it."""
+    with pytest.raises(ConfigError) as exc:
+        adapter_class(_definition(tmp_path, material="albedo = {P_albedo}"))
+    assert "{P_albedo} in models.lambert.template_vars.material is not a placeholder" in str(exc.value)
+    assert "write {p_albedo}" in str(exc.value)
 
 
 def test_no_image_where_asked_lists_what_the_renderer_did_write(tmp_path):
@@ -112,7 +121,8 @@ def test_an_ambiguous_short_lobe_form_is_refused_showing_the_long_form(tmp_path)
     with pytest.raises(ConfigError) as exc:
         adapter_class(path)
     msg = str(exc.value)
-    assert "brace.yaml" in msg and "leaves color to neither lobe" in msg and "params: [specular, color]" in msg, msg
+    assert "brace.yaml" in msg and "leaves color to neither lobe" in msg and "or in neither when both lobes share" in msg
+    assert "diffuse: {overrides: {specular: 0}, params: [diffuse]}" in msg, msg
 
 
 def test_the_command_line_has_escapes_too(tmp_path):
@@ -150,6 +160,7 @@ def test_remap_check_passes_a_correct_renderer(tmp_path):
     (["--scale", "3.14159265"], "units", "a factor of π"),
     (["--scale", "0.0795774715"], "units", "a factor of 1/(4π)"),
     (["--mirror"], "orientation", "the image is mirrored left-right"),
+    (["--mirror", "--scale", "3.14159265"], "units", "a factor of π"),
     (["--clip"], "precision", "clipped"),
     (["--pixels", "half"], "precision", "half float"),
 ])
