@@ -106,4 +106,4 @@ def test_example_package_installs_with_pip_and_appears_in_remap_adapters(tmp_pat
     out = subprocess.run([sys.executable, "-m", "brdfremap.core.cli", "adapters"], env=env, capture_output=True,
                          text=True, check=True).stdout
     assert "toy  [brdfremap-example (toy)]" in out
-    assert "model toy: diffuse, specular, alpha, unused" in out
+    assert "model toy (each lobe renders alone):" in out and "alpha (scalar [0.01, 1], log; default 0.2)" in out
