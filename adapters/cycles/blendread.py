@@ -7,7 +7,7 @@ used); an input the model has no parameter for is listed when it is away from it
 
 from __future__ import annotations
 
-from brdfremap.adapters.cycles.material import NODES
+from brdfremap.adapters.cycles.material import NODES, socket as input_socket
 
 BY_TYPE = {"BSDF_PRINCIPLED": "principled", "BSDF_GLOSSY": "glossy", "BSDF_DIFFUSE": "diffuse",
            "BSDF_METALLIC": "metallic"}
@@ -47,7 +47,7 @@ def _material(bpy, mat, defaults) -> dict:
     for pname, prop in props.items():
         entry["params"][pname] = str(getattr(node, prop)).lower()
     for pname, sock in inputs.items():
-        socket = node.inputs[sock]
+        socket = input_socket(node, sock)
         if socket.is_linked:
             entry["textured"].append(f"{pname} <- {_source(socket.links[0].from_node)}")
         entry["params"][pname] = _plain(socket.default_value)

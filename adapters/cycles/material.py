@@ -10,7 +10,13 @@ NODES: dict[str, tuple[str, dict[str, str], dict[str, str]]] = {
     "principled": ("ShaderNodeBsdfPrincipled", {
         "base_color": "Base Color", "metallic": "Metallic", "roughness": "Roughness", "ior": "IOR",
         "specular_ior_level": "Specular IOR Level", "specular_tint": "Specular Tint",
-        "coat_weight": "Coat Weight", "coat_roughness": "Coat Roughness",
+        "coat_weight": "Coat Weight", "coat_roughness": "Coat Roughness", "coat_ior": "Coat IOR",
+        "coat_tint": "Coat Tint", "sheen_weight": "Sheen Weight", "sheen_roughness": "Sheen Roughness",
+        "sheen_tint": "Sheen Tint", "diffuse_roughness": "Diffuse Roughness", "subsurface_weight": "Subsurface Weight",
+        "subsurface_radius": "Subsurface Radius", "subsurface_scale": "Subsurface Scale",
+        "subsurface_ior": "Subsurface IOR", "subsurface_anisotropy": "Subsurface Anisotropy",
+        "transmission_weight": "Transmission Weight", "thin_film_thickness": "Thin Film Thickness",
+        "thin_film_ior": "Thin Film IOR", "alpha": "Alpha",
     }, {"distribution": "distribution"}),
     "glossy": ("ShaderNodeBsdfGlossy", {"color": "Color", "roughness": "Roughness"}, {"distribution": "distribution"}),
     "diffuse": ("ShaderNodeBsdfDiffuse", {"color": "Color", "roughness": "Roughness"}, {}),
@@ -22,7 +28,13 @@ FIXED_PROPS: dict[str, dict[str, str]] = {"metallic": {"fresnel_type": "PHYSICAL
 
 
 # RGB parameters on 3-float vector sockets rather than RGBA colour sockets.
-VECTOR_SOCKETS = {("metallic", "ior"), ("metallic", "extinction")}
+VECTOR_SOCKETS = {("metallic", "ior"), ("metallic", "extinction"), ("principled", "subsurface_radius")}
+
+
+def socket(node, name: str):
+    """A node's input by name. Not ``node.inputs[name]``: Blender 5.0 does not find "Subsurface IOR"
+    that way (another input's name, "IOR", is a suffix of it), though the socket is there."""
+    return next(s for s in node.inputs if s.identifier == name or s.name == name)
 
 
 def socket_value(model: str, name: str, v: Value):
@@ -50,6 +62,12 @@ def python_snippet(model: str, params: dict[str, Value], name: str = "brdf-remap
         "    if n.type != 'OUTPUT_MATERIAL':",
         "        nodes.remove(n)",
         f"bsdf = nodes.new({node_type!r})",
+        "",
+        "",
+        "def socket(name):  # by name: bsdf.inputs['Subsurface IOR'] is not found in Blender 5.0",
+        "    return next(s for s in bsdf.inputs if s.name == name)",
+        "",
+        "",
     ]
     for prop, value in FIXED_PROPS.get(model, {}).items():
         lines.append(f"bsdf.{prop} = {value!r}")
@@ -58,7 +76,7 @@ def python_snippet(model: str, params: dict[str, Value], name: str = "brdf-remap
     for pname, sock in inputs.items():
         v = socket_value(model, pname, params[pname])
         shown = "(" + ", ".join(f"{x:.6g}" for x in v) + ")" if isinstance(v, tuple) else f"{v:.6g}"
-        lines.append(f"bsdf.inputs[{sock!r}].default_value = {shown}")
+        lines.append(f"socket({sock!r}).default_value = {shown}")
     lines += [
         "out = next(n for n in nodes if n.type == 'OUTPUT_MATERIAL')",
         "links.new(bsdf.outputs[0], out.inputs['Surface'])",

@@ -27,6 +27,8 @@ def _unit(name, default, fit=True, desc="", upper=1.0, **kw):
 # the dielectric's IOR and Specular IOR Level no longer reach the image (checked: identical
 # renders in Blender 5.0; tests/test_cycles.py keeps checking it).
 METAL = {"metallic": 1.0}
+NO_COAT, NO_SHEEN, NO_SSS, NO_FILM = ({"coat_weight": 0.0}, {"sheen_weight": 0.0}, {"subsurface_weight": 0.0},
+                                      {"thin_film_thickness": 0.0})
 
 
 PRINCIPLED = ModelSpec(
@@ -44,10 +46,38 @@ PRINCIPLED = ModelSpec(
               inert_when=METAL),
         ParamSpec(name="specular_tint", kind="rgb", default=(1.0, 1.0, 1.0), fit=False, description="Specular Tint."),
         _unit("coat_weight", 0.0, fit=False, desc="Coat Weight."),
-        _unit("coat_roughness", 0.03, fit=False, desc="Coat Roughness.", inert_when={"coat_weight": 0.0}),
+        _unit("coat_roughness", 0.03, fit=False, desc="Coat Roughness.", inert_when=NO_COAT),
+        ParamSpec(name="coat_ior", kind="scalar", lower=1.0, upper=4.0, default=1.5, fit=False, inert_when=NO_COAT,
+                  description="Coat IOR."),
+        ParamSpec(name="coat_tint", kind="rgb", default=(1.0, 1.0, 1.0), fit=False, inert_when=NO_COAT,
+                  description="Coat Tint (the colour light takes through the coat)."),
+        _unit("sheen_weight", 0.0, fit=False, desc="Sheen Weight."),
+        _unit("sheen_roughness", 0.5, fit=False, desc="Sheen Roughness.", inert_when=NO_SHEEN),
+        ParamSpec(name="sheen_tint", kind="rgb", default=(1.0, 1.0, 1.0), fit=False, inert_when=NO_SHEEN,
+                  description="Sheen Tint."),
+        _unit("diffuse_roughness", 0.0, fit=False, desc="Diffuse Roughness (0: Lambertian)."),
+        _unit("subsurface_weight", 0.0, fit=False, desc="Subsurface Weight (the probe sphere is 2 units across: "
+              "radii well below it look like a softened diffuse)."),
+        ParamSpec(name="subsurface_radius", kind="rgb", lower=0.0, upper=100.0, default=(1.0, 0.2, 0.1), fit=False,
+                  inert_when=NO_SSS, description="Subsurface Radius per channel (times Subsurface Scale)."),
+        ParamSpec(name="subsurface_scale", kind="scalar", lower=0.0, upper=100.0, default=0.05, fit=False,
+                  inert_when=NO_SSS, description="Subsurface Scale (scene units)."),
+        ParamSpec(name="subsurface_ior", kind="scalar", lower=1.01, upper=3.8, default=1.4, fit=False,
+                  inert_when=NO_SSS, description="Subsurface IOR."),
+        _unit("subsurface_anisotropy", 0.0, fit=False, desc="Subsurface Anisotropy.", inert_when=NO_SSS),
+        _unit("transmission_weight", 0.0, fit=False, desc="Transmission Weight (the probe sees the refracted "
+              "black background: transmission shows as light missing from the reflection)."),
+        ParamSpec(name="thin_film_thickness", kind="scalar", lower=0.0, upper=100000.0, default=0.0, fit=False,
+                  description="Thin Film Thickness (nm)."),
+        ParamSpec(name="thin_film_ior", kind="scalar", lower=1.0, upper=3.0, default=1.33, fit=False,
+                  inert_when=NO_FILM, description="Thin Film IOR."),
+        _unit("alpha", 1.0, fit=False, desc="Alpha (coverage: below 1 the black background shows through)."),
     ),
     lobes=PASS_LOBES_PRINCIPLED,
 )
+"""Every reflection input of Blender 5.0's Principled BSDF but Anisotropic and its Rotation (the
+probe sphere has no tangent frame) and Emission (the probe measures reflection). Past the first
+nine they are held (`--fix` them): a value a source carries is rendered, none is fitted."""
 
 GLOSSY = ModelSpec(
     name="glossy",

@@ -194,7 +194,7 @@ class BlenderState:
 
     @staticmethod
     def set_values(bsdf, model: str, params: dict) -> None:
-        from brdfremap.adapters.cycles.material import NODES, enum_value, socket_value
+        from brdfremap.adapters.cycles.material import NODES, enum_value, socket, socket_value
 
         _, inputs, props = NODES[model]
         for pname, prop in props.items():
@@ -202,7 +202,7 @@ class BlenderState:
             if getattr(bsdf, prop) != value:
                 setattr(bsdf, prop, value)
         for pname, sock in inputs.items():
-            bsdf.inputs[sock].default_value = socket_value(model, pname, params[pname])
+            socket(bsdf, sock).default_value = socket_value(model, pname, params[pname])
 
     def material(self, model: str, params: dict):
         if model not in self.materials:

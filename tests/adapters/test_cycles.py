@@ -61,10 +61,13 @@ def test_what_principled_declares_inert_leaves_the_image_unchanged(cycles_adapte
     spec = cycles_adapter.models["principled"]
     p = _p(cycles_adapter, "principled", base_color=[0.9, 0.6, 0.3], metallic=1.0, roughness=0.3)
     ref = cycles_adapter.render("principled", p, SCENE)
-    inert = [q.name for q in spec.parameters if q.inert_when]
-    assert set(inert) == {"ior", "specular_ior_level", "coat_roughness"}
-    for name, value in (("ior", 2.4), ("specular_ior_level", 0.1), ("coat_roughness", 0.6)):  # coat_weight is 0
-        assert spec.is_inert(name, p)
+    away = {"ior": 2.4, "specular_ior_level": 0.1, "coat_roughness": 0.6, "coat_ior": 2.2, "coat_tint": (0.9, 0.5, 0.3),
+            "sheen_roughness": 0.1, "sheen_tint": (1.0, 0.2, 0.2), "subsurface_radius": (0.1, 1.0, 1.0),
+            "subsurface_scale": 1.0, "subsurface_ior": 2.0, "subsurface_anisotropy": 0.5, "thin_film_ior": 2.0}
+    inert = {q.name for q in spec.parameters if q.inert_when}
+    assert inert == set(away)  # every declaration is checked here: coat, sheen, subsurface weights and film 0
+    for name, value in away.items():
+        assert spec.is_inert(name, p), name
         assert np.array_equal(cycles_adapter.render("principled", {**p, name: value}, SCENE), ref), name
     # Not inert below 1, and Specular Tint (the F82 edge tint) does reach a metal.
     q = {**p, "metallic": 0.9}
@@ -90,7 +93,7 @@ def test_native_outputs(cycles_adapter, tmp_path):
     assert blend.read_bytes()[:7] == b"BLENDER"
     text = snippet.read_text()
     ast.parse(text)
-    assert "ShaderNodeBsdfPrincipled" in text and "'Metallic'].default_value = 1" in text
+    assert "ShaderNodeBsdfPrincipled" in text and "socket('Metallic').default_value = 1" in text
     assert not [f for f in os.listdir(tmp_path) if f.startswith(".")]  # no temp files left
 
 
