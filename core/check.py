@@ -108,9 +108,10 @@ def images(render: Callable, models: dict) -> Row:
     name = "images: RGB float, finite, lit, black background"
     n = SCENE.resolution
     for model, spec in models.items():
-        img = render(model, spec.complete({}), SCENE)
+        img = np.asarray(render(model, spec.complete({}), SCENE))
         if img.shape != (n, n, 3) or not np.isfinite(img).all() or img.max() <= 0:
-            return Row(name, False, f"model {model}: shape {img.shape}, max {float(np.nanmax(img)):.3g}",
+            top = float(np.nanmax(img)) if img.size and not np.isnan(img).all() else float("nan")
+            return Row(name, False, f"model {model}: shape {img.shape}, max {top:.3g}",
                        f"write {n}x{n} RGB float pixels of the lit sphere")
         if img[0, 0].max() != 0 or img[-1, -1].max() != 0:
             return Row(name, False, f"model {model}: the background is not black",
@@ -160,5 +161,9 @@ def precision(render: Callable, white: tuple[str, dict] | None) -> Row:
 
 def run(render: Callable, models: dict, white: tuple[str, dict] | None) -> list[Row]:
     """Every check; ``render(model, params, scene, lobe=None) -> image``."""
-    return [images(render, models), calibration(render, white), orientation(render, white),
+    first = images(render, models)
+    if not first.passed:  # the others index the image: say they did not run rather than fail on its shape
+        return [first] + [Row(name, None, "not run: the images are not right (see images)") for name in (
+            "units", "orientation", "determinism", "lobes", "precision")]
+    return [first, calibration(render, white), orientation(render, white),
             determinism(render, models), lobes(render, models), precision(render, white)]

@@ -84,7 +84,11 @@ def clipped_at(img: np.ndarray) -> tuple[float, int] | None:
     if not 0.0 < top <= 1.0 + 1e-6:
         return None
     n = int(np.count_nonzero(lit >= top * (1 - 1e-6)))
-    return (top, n) if n >= max(CLIP_MIN_PIXELS, CLIP_MIN_FRACTION * np.count_nonzero(lit > 0)) else None
+    lit_n = int(np.count_nonzero(lit > 0))
+    # A clipped image also has lit pixels below its ceiling; one whose every lit pixel is equal (a
+    # white sphere under a constant environment) is uniform, not clipped.
+    below = lit_n - n
+    return (top, n) if n >= max(CLIP_MIN_PIXELS, CLIP_MIN_FRACTION * lit_n) and below >= 0.1 * lit_n else None
 
 
 def _srgb_decode(x: np.ndarray) -> np.ndarray:
@@ -97,10 +101,10 @@ def _srgb_encode(x: np.ndarray) -> np.ndarray:
 
 def eight_bit(img: np.ndarray) -> str:
     """"sRGB" or "linear" when every value is one of 256 levels of that encoding (an 8-bit image),
-    else "". Only for an image with more than 256 lit values: fewer prove nothing."""
+    else "". Only for an image of more than 256 lit pixels and 32 distinct values."""
     v = np.unique(np.asarray(img, np.float64).ravel())
-    if v.size > 256 or np.count_nonzero(np.asarray(img) > 0) <= 256 or v.max() > 1 + 1e-6:
-        return ""
+    if not 32 <= v.size <= 256 or np.count_nonzero(np.asarray(img) > 0) <= 256 or v.max() > 1 + 1e-6:
+        return ""  # fewer than 32 distinct values prove nothing (a uniform sphere is one)
     if np.allclose(np.round(v * 255) / 255, v, atol=1e-6):
         return "linear"
     if np.allclose(_srgb_decode(np.round(_srgb_encode(v) * 255) / 255), v, atol=1e-6):

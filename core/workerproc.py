@@ -20,15 +20,26 @@ from typing import Any
 from .errors import RenderError
 
 
-def die_with_parent() -> None:
-    """In a child process about to exec a renderer: the kernel kills it when remap dies, even by
-    kill -9 (Linux's parent-death signal; elsewhere a no-op)."""
+def _prctl():
+    """libc's prctl, looked up once here, in the parent: a child forked while other threads run may
+    only call it, not import or load anything (their locks may be held at the fork)."""
     try:
         import ctypes
 
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+        return ctypes.CDLL("libc.so.6", use_errno=True).prctl
     except (OSError, AttributeError):
-        pass
+        return None
+
+
+_PRCTL = _prctl()
+
+
+def die_with_parent() -> None:
+    """In a child process about to exec a renderer: the kernel kills it when remap dies, even by
+    kill -9 (Linux's parent-death signal; elsewhere a no-op)."""
+    if _PRCTL is not None:
+        _PRCTL(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+
 
 _LIVE: "weakref.WeakSet[JsonLinesWorker]" = weakref.WeakSet()
 

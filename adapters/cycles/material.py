@@ -34,7 +34,10 @@ VECTOR_SOCKETS = {("metallic", "ior"), ("metallic", "extinction"), ("principled"
 def socket(node, name: str):
     """A node's input by name. Not ``node.inputs[name]``: Blender 5.0 does not find "Subsurface IOR"
     that way (another input's name, "IOR", is a suffix of it), though the socket is there."""
-    return next(s for s in node.inputs if s.identifier == name or s.name == name)
+    found = next((s for s in node.inputs if s.identifier == name or s.name == name), None)
+    if found is None:
+        raise KeyError(f"the {node.bl_label} node has no input {name!r} in this Blender")
+    return found
 
 
 def socket_value(model: str, name: str, v: Value):

@@ -202,7 +202,8 @@ class BlenderState:
             if getattr(bsdf, prop) != value:
                 setattr(bsdf, prop, value)
         for pname, sock in inputs.items():
-            socket(bsdf, sock).default_value = socket_value(model, pname, params[pname])
+            if pname in params:  # a caller naming fewer inputs (cycles-subprocess.yaml) leaves Blender's defaults
+                socket(bsdf, sock).default_value = socket_value(model, pname, params[pname])
 
     def material(self, model: str, params: dict):
         if model not in self.materials:

@@ -15,6 +15,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import threading
 from pathlib import Path
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
@@ -99,6 +100,8 @@ class SubprocessAdapter(Adapter):
                                           start_timeout=d.start_timeout, request_timeout=d.timeout)
         self._ids = itertools.count(1)
         self._running: set[subprocess.Popen] = set()
+        self._lock = threading.Lock()
+        self._stopping = threading.Event()
         self.warned_depth = False
 
     def describe(self) -> dict[str, Any]:
@@ -149,14 +152,20 @@ class SubprocessAdapter(Adapter):
         if self.worker is not None or jobs < 2:
             return super().render_batch(requests)
         pool = ThreadPoolExecutor(max_workers=jobs, thread_name_prefix=f"render-{self.definition.name}")
+        self._stopping.clear()
         try:
             return list(pool.map(lambda r: self.render(*r), requests))
-        except BaseException:  # a failed render, Ctrl-C: the others' process groups go too
-            for proc in list(self._running):
+        except BaseException:  # a failed render, Ctrl-C: nothing new starts, the others' process groups go
+            self._stopping.set()
+            pool.shutdown(wait=False, cancel_futures=True)
+            with self._lock:
+                running = list(self._running)
+            for proc in running:
                 _kill_group(proc)
             raise
         finally:
             pool.shutdown(wait=True, cancel_futures=True)
+            self._stopping.clear()
 
     def write_native(self, model: str, params: dict[str, Value], out_dir: Path) -> list[Path]:
         """The model's `native:` text with the fitted values, when the definition gives one."""
@@ -202,15 +211,21 @@ class SubprocessAdapter(Adapter):
             argv[0] = found
         return argv
 
-    def _run_once(self, model, p, values) -> str:
-        argv = self._argv(p, values)
+    def _start(self, model, p, argv: list[str]) -> subprocess.Popen:
         try:
-            proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+            return subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                     text=True, env=self.env, cwd=self.here, start_new_session=True,
                                     preexec_fn=die_with_parent)
         except OSError as exc:
             raise self._fail(model, p, f"cannot run {argv[0]!r}: {exc}") from None
-        self._running.add(proc)
+
+    def _run_once(self, model, p, values) -> str:
+        argv = self._argv(p, values)
+        with self._lock:  # started and registered together, or not at all once a batch is stopping
+            if self._stopping.is_set():
+                raise self._fail(model, p, "not started: another render of its batch failed")
+            proc = self._start(model, p, argv)
+            self._running.add(proc)
         try:
             out, err = proc.communicate(timeout=self.definition.timeout)
         except subprocess.TimeoutExpired:
@@ -223,7 +238,8 @@ class SubprocessAdapter(Adapter):
             proc.communicate()
             raise
         finally:
-            self._running.discard(proc)
+            with self._lock:
+                self._running.discard(proc)
         if proc.returncode != 0:
             raise self._fail(model, p, f"exit code {proc.returncode}", err or out)
         return err or out
@@ -252,9 +268,12 @@ class SubprocessAdapter(Adapter):
         """Say once if a float format stores too few bits: a finite difference of a fraction of a
         percent, and a lobe sum, are lost in rounding (8-bit PNG is display-encoded, and known)."""
         fmt = pixel_format(output)
-        if self.warned_depth or self.definition.output_format == "png" or fmt in ("float", "double", ""):
+        if self.definition.output_format == "png" or fmt in ("float", "double", ""):
             return
-        self.warned_depth = True
+        with self._lock:
+            if self.warned_depth:
+                return
+            self.warned_depth = True
         print(f"warning: renderer {self.definition.name!r} writes {fmt} pixels to {output.suffix}: a fit needs "
               "32-bit float (half floats round at 0.1 %, finer than a Jacobian's steps); set the renderer's output "
               "to float32", file=sys.stderr)

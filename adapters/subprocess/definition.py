@@ -25,8 +25,12 @@ class Native(BaseModel):
     @field_validator("file")
     @classmethod
     def _plain(cls, name: str) -> str:
-        reserved = ("result.json", "source.exr", "target.exr", "source.png", "target.png", "error.png")
-        if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9._-]*", name) or name in reserved or ".." in name:
+        from brdfremap.core.execute import IMAGES
+        from brdfremap.core.store import RESULT
+
+        reserved = (RESULT, *IMAGES)
+        # Compared without case: on a case-insensitive disk Result.json is result.json.
+        if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9._-]*", name) or name.lower() in reserved or ".." in name:
             raise ValueError(f"{name!r} must be a plain file name (letters, digits, . _ -), not one of "
                              f"{', '.join(reserved)}")
         return name
@@ -87,8 +91,10 @@ class RendererDef(BaseModel):
     @field_validator("command")
     @classmethod
     def _known_placeholders(cls, argv: list[str]) -> list[str]:
+        from .template import placeholders
+
         for arg in argv:
-            for name in _TOKEN.findall(arg):
+            for name, _ in placeholders(arg):
                 if name not in PLACEHOLDERS:
                     raise ValueError(f"unknown placeholder {{{name}}} in {arg!r} (known: {', '.join(PLACEHOLDERS)})")
         if any("{defines}" in a and a != "{defines}" for a in argv):
@@ -119,9 +125,12 @@ class RendererDef(BaseModel):
         if self.calibration is not None and self.calibration.model not in self.models:
             raise ValueError(f"calibration: model {self.calibration.model!r} is not one of models "
                              f"({', '.join(self.models)})")
-        if self.mode == "oneshot" and not any("{output}" in a for a in self.command):
+        from .template import placeholders
+
+        used = {name for a in self.command for name, _ in placeholders(a)}
+        if self.mode == "oneshot" and "output" not in used:
             raise ValueError("command: a oneshot command must say where to write the image: use {output}")
-        if any("{scene_file}" in a for a in self.command) and not self.scene_template:
+        if "scene_file" in used and not self.scene_template:
             raise ValueError("command: {scene_file} is the filled scene template: give scene_template (a file "
                              "beside this one) too")
         return self

@@ -92,6 +92,11 @@ def check_definition(path: Path, definition) -> None:
                               file=str(path), field="scene_template") from None
     for name, m in definition.models.items():
         params = {f"p_{p.name}" for p in m.parameters}
+        for key in m.template_vars:
+            if not re.fullmatch(r"[a-z_][a-z0-9_]*", key) or key in SCENE_VARS or key in params:
+                raise ConfigError(f"{key!r} cannot be a template_vars name: use lower case, digits and underscores, "
+                                  "and no name the scene or a parameter already fills",
+                                  file=str(path), field=f"models.{name}.template_vars")
         if m.native is not None:
             check(m.native.text, params | {"model"}, str(path), f"models.{name}.native.text", lines=False)
         inner = set(SCENE_VARS) | params

@@ -181,12 +181,14 @@ class NativeFiles:
         out = []
         for item in items:
             report = read_report(item.folder / RESULT)
-            natives = [f.name for f in report.files if f.name not in IMAGES]
+            natives = [f.name for f in report.files if f.name not in IMAGES and Path(f.name).name == f.name]
             dest = folder / "native" / item.folder.name  # the material's slot: its name, made safe and unique
-            dest.mkdir(parents=True, exist_ok=True)
-            for name in natives:
-                data = (item.folder / name).read_bytes()
-                out.append(write_bytes_atomic(dest / name, data))
+            try:
+                dest.mkdir(parents=True, exist_ok=True)
+                for name in natives:
+                    out.append(write_bytes_atomic(dest / name, (item.folder / name).read_bytes()))
+            except OSError as exc:
+                raise ConfigError(f"cannot gather the native files: {exc.strerror or exc}", file=str(dest)) from None
         return [folder / "native"] if out else []
 
 

@@ -304,3 +304,29 @@ def test_convert_to_a_definition_file_gathers_each_materials_native_file(tmp_pat
     text = written.read_text()
     values = [float(v) for v in text.split("=")[1].split("}")[0].split()]
     assert text.startswith("material { albedo = ") and all(abs(v / 0.8 - 1) < 0.05 for v in values), text
+
+
+@pytest.mark.parametrize("yaml_text, words", [
+    ("    native: {file: Result.JSON, text: a}\n", "plain file name"),
+    ("    template_vars: {width: '1'}\n", "cannot be a template_vars name"),
+])
+def test_names_that_would_overwrite_a_result_file_or_a_placeholder_are_refused(tmp_path, yaml_text, words):
+    path = _definition(tmp_path)
+    text = path.read_text()
+    if "template_vars" in yaml_text:
+        text = text.replace("    template_vars:\n      material: 'albedo = {p_albedo}'\n",
+                            "    template_vars: {material: 'albedo = {p_albedo}', width: '1'}\n")
+    else:
+        text += yaml_text
+    path.write_text(text)
+    with pytest.raises(ConfigError) as exc:
+        adapter_class(path)
+    assert words in str(exc.value)
+
+
+def test_an_escaped_output_placeholder_is_not_taken_for_one(tmp_path):
+    path = _definition(tmp_path)
+    path.write_text(path.read_text().replace('"{output}"', '"{{output}}"'))
+    with pytest.raises(ConfigError) as exc:
+        adapter_class(path)
+    assert "use {output}" in str(exc.value)

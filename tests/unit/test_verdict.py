@@ -110,3 +110,18 @@ def test_a_fit_at_more_samples_of_the_same_lights_checks_no_scene_as_given():
     env = ProbeRenders(None, {}, None, None, job.model_copy(update={"lights": [EnvironmentLight(type="environment")]}),
                        given=job)
     assert not more.other_lights and env.other_lights and more.job_scene is job
+
+
+def test_a_uniform_float_image_is_neither_clipped_nor_8_bit():
+    """Review: a white 0.8 sphere under a constant environment has every lit pixel at exactly 0.8
+    (level 204/255): not a clipped or 8-bit image. A sphere clipped at 1 with a lit slope below is."""
+    from brdfremap.core.metrics import clipped_at, eight_bit
+
+    uniform = np.zeros((64, 64, 3), np.float32)
+    uniform[8:56, 8:56] = 0.8
+    assert clipped_at(uniform) is None and eight_bit(uniform) == ""
+    ramp = np.zeros((64, 64, 3), np.float32)
+    ramp[8:56, 8:56] = np.linspace(0.05, 3.0, 48 * 48).reshape(48, 48)[:, :, None]
+    clipped = np.minimum(ramp, 1.0)
+    assert clipped_at(ramp) is None and clipped_at(clipped) is not None
+    assert eight_bit(np.round(clipped * 255) / 255) == "linear"
