@@ -12,8 +12,6 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 
 PLACEHOLDERS = ("scene_json", "params_json", "output", "model", "width", "height", "spp", "spp_sqrt", "spp_log2",
                 "seed", "scene_file", "python", "here", "defines")
-_TOKEN = re.compile(r"(?<!\{)\{([a-z_][a-z0-9_]*)\}(?!\})")
-"""A placeholder in a command argument or a define (``{{``/``}}`` are literal braces)."""
 
 
 class Native(BaseModel):
@@ -114,8 +112,10 @@ class RendererDef(BaseModel):
     @field_validator("define")
     @classmethod
     def _define(cls, items: list[str]) -> list[str]:
+        from .template import placeholders
+
         for item in items:
-            for name in _TOKEN.findall(item):
+            for name, _ in placeholders(item):
                 if name not in ("key", "value"):
                     raise ValueError(f"unknown placeholder {{{name}}} in {item!r}: a define knows {{key}} and {{value}}")
         return items

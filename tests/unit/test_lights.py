@@ -14,7 +14,6 @@ from brdfremap.core.renders import CachedRenderer
 from brdfremap.core.scene import EnvironmentLight, PointLight, ProbeScene, load_scene
 from brdfremap.core.testing import analytic_lambert, environment_irradiance, sphere_hits
 from brdfremap_example.adapter import ToyAdapter
-from pydantic import ValidationError
 
 from tests.helpers import ROOT, one_line_error, remap
 
