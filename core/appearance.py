@@ -6,6 +6,7 @@ session uses the pair as the fit's informed start; the fit corrects what the rea
 
 from __future__ import annotations
 
+import math
 from typing import Any, Literal
 
 import numpy as np
@@ -16,10 +17,30 @@ from .schemas import _Strict
 RGB = tuple[float, float, float]
 
 
+class Coat(_Strict):
+    """A clear dielectric layer over the material."""
+
+    weight: float = Field(ge=0.0, le=1.0, description="How much of a full layer (1: the whole surface coated).")
+    alpha: float = Field(gt=0.0, description="Microfacet α of the coat's reflection.")
+    ior: float = Field(1.5, gt=1.0, description="The coat's index of refraction.")
+    tint: RGB = Field((1.0, 1.0, 1.0), description="The colour light takes through the coat.")
+
+
+class Sheen(_Strict):
+    """A soft retro-reflective layer at grazing angles (cloth, velvet)."""
+
+    weight: float = Field(ge=0.0, description="Amount.")
+    tint: RGB = Field((1.0, 1.0, 1.0), description="Colour of the sheen.")
+    roughness: float = Field(0.5, ge=0.0, le=1.0, description="Spread of the sheen (Cycles' Sheen Roughness).")
+
+
 class Appearance(_Strict):
     """What today's exporters carry over: the kind of material, its specular lobe's α and
-    normal-incidence reflectance, its diffuse albedo. Conventions: α is the microfacet roughness
-    (Blender's roughness is √α); reflectances are linear RGB."""
+    normal-incidence reflectance, its diffuse albedo; a coat, a sheen, anisotropy and
+    transmission when it has them. Conventions: α is the microfacet roughness (Blender's
+    roughness is √α); reflectances are linear RGB; anisotropy is Disney's (α along the tangent
+    α/√(1 − 0.9 a), across α·√(1 − 0.9 a)) and its rotation a fraction of a turn of the tangent,
+    counter-clockwise about the outward normal, from the probe's (the sphere's latitudes)."""
 
     kind: Literal["conductor", "dielectric"] = Field(
         description="A metal (coloured specular, no diffuse) or a dielectric (diffuse base, white specular).")
@@ -30,6 +51,14 @@ class Appearance(_Strict):
     ior: float | None = Field(None, gt=0.0, description="A dielectric's index of refraction (in air).")
     eta: RGB | None = Field(None, description="A conductor's complex IOR, real part, when known.")
     k: RGB | None = Field(None, description="A conductor's complex IOR, imaginary part, when known.")
+    anisotropy: float = Field(0.0, ge=0.0, le=1.0, description="Disney's anisotropy of the specular lobe.")
+    rotation: float = Field(0.0, description="Rotation of the anisotropy's tangent, in turns.")
+    coat: Coat | None = Field(None, description="A clear coat, if one.")
+    sheen: Sheen | None = Field(None, description="A sheen, if one.")
+    transmission: float = Field(0.0, ge=0.0, le=1.0, description="Fraction of the dielectric lobe transmitted "
+                                                                 "(glass: 1).")
+    transmittance: RGB = Field((1.0, 1.0, 1.0), description="Colour of the transmitted light (the probe cannot "
+                                                            "see it: carried as read).")
 
     def conductor_ior(self, edge_tint: float = 0.5) -> tuple[RGB, RGB]:
         """The complex IOR: as given, else one with this F0 and edge tint (Gulbrandsen 2014)."""
@@ -88,3 +117,21 @@ def eta_k_from_reflectivity(r: Any, g: Any) -> tuple[np.ndarray, np.ndarray]:
     n = g * n_min + (1 - g) * n_max
     k2 = (r * (n + 1) ** 2 - (n - 1) ** 2) / (1 - r)
     return n, np.sqrt(np.maximum(k2, 0.0))
+
+
+def anisotropy_from_alphas(alpha_u: float, alpha_v: float) -> tuple[float, float, float]:
+    """(α, anisotropy, rotation) of an α_u (along the tangent) and α_v (across): Disney's aspect
+    √(1 − 0.9 a) is α_v/α_u's square root, the tangent turned a quarter when α_v is the larger
+    (aspect is at most 1); anisotropy clipped to 1 (a ratio of 10)."""
+    alpha = math.sqrt(alpha_u * alpha_v)
+    rotation = 0.0 if alpha_u >= alpha_v else 0.25
+    ratio = min(alpha_u, alpha_v) / max(alpha_u, alpha_v)
+    return alpha, min((1.0 - ratio) / 0.9, 1.0), rotation
+
+
+def alphas_from_anisotropy(alpha: float, anisotropy: float, rotation: float) -> tuple[float, float]:
+    """(α_u, α_v) of a Disney anisotropy whose tangent is turned by a whole number of quarter turns
+    (the nearest one otherwise: Mitsuba's anisotropic BSDFs have no rotation)."""
+    aspect = math.sqrt(1.0 - 0.9 * anisotropy)
+    along, across = alpha / aspect, alpha * aspect
+    return (across, along) if round(rotation * 4) % 2 else (along, across)

@@ -113,11 +113,13 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
         progress("source", 0, float("nan"))
     env_ok = all("environment" in adapters[n].light_types for n in (src.adapter, tgt.adapter))
     fit = choose_scene(lambda sc: source(resolved.source_params, scene=sc), job.scene, env_ok,
-                       job.settings.resolve_limit, job.settings.fit_scene)
+                       job.settings.resolve_limit, job.settings.fit_scene,
+                       smooth=resolved.source_spec.smooth or resolved.target_spec.smooth)
     renders = ProbeRenders(source, resolved.source_params, resolved.source_spec, target, fit.scene, given=job.scene,
                            given_noise=fit.scene_noise)
     start = informed_start(resolved, adapters) if job.settings.start == "informed" else {}
-    result = remap(resolved.target_spec, {**resolved.base, **start}, resolved.free, renders, job.settings, job.tuning,
+    free = fitted(resolved, start)
+    result = remap(resolved.target_spec, {**resolved.base, **start}, free, renders, job.settings, job.tuning,
                    progress, alternatives=alternatives(resolved, start) if job.settings.start == "informed" else [])
     files = artifacts(adapters[tgt.adapter], tgt.model, result.params, renders.source_image(), result.target_image)
     info = describe(adapters, list(dict.fromkeys((src.adapter, tgt.adapter))))
@@ -165,7 +167,8 @@ def informed_start(resolved: Resolved, adapters: AdapterPool) -> dict[str, Value
         if (p.kind == "choice" and p.name not in resolved.fixed and conv.get(p.name) in p.choices
                 and _named(adapters[job.target.adapter], job.target.model, look, resolved.base, p, conv[p.name])):
             out[p.name] = conv[p.name]
-    for name in resolved.free:
+    # Held ones too: the source's coat tint is rendered, not fitted.
+    for name in (p.name for p in spec.parameters if p.kind != "choice" and p.name not in resolved.fixed):
         try:
             v = spec.param(name).clip(conv[name])
         except (KeyError, TypeError, ValueError):
@@ -173,6 +176,17 @@ def informed_start(resolved: Resolved, adapters: AdapterPool) -> dict[str, Value
         if all(map(math.isfinite, v if isinstance(v, tuple) else (v,))):  # type: ignore[arg-type]
             out[name] = v
     return out
+
+
+def fitted(resolved: Resolved, start: dict[str, Value]) -> list[str]:
+    """The parameters the fit varies: the target's fittable ones with the start's choices (an
+    anisotropic roughconductor fits alpha_u and alpha_v), and the held ones the source has
+    (`ParamSpec.fit_when_carried`: its coat's weight and roughness, its sheen, its anisotropy)."""
+    spec, params = resolved.target_spec, {**resolved.base, **start}
+    free = spec.fittable(params, fixed=set(resolved.fixed))
+    return free + [p.name for p in spec.parameters
+                   if p.fit_when_carried and p.name in start and p.name not in resolved.fixed and p.name not in free
+                   and spec.is_active(p.name, params) and not spec.is_inert(p.name, params)]
 
 
 def _named(adapter, model: str, look, base: dict[str, Value], p, value: Value) -> bool:

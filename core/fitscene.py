@@ -51,13 +51,18 @@ def _samples_for(noise: float, spp: int) -> int:
 
 
 def choose(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, environment_ok: bool,
-           limit: float, policy: str = "auto") -> FitScene:
+           limit: float, policy: str = "auto", smooth: bool = False) -> FitScene:
     """The fit scene for a source rendered by ``render(scene)``; ``environment_ok``: both adapters
     render the studio environment; ``limit``: the noise above which a scene cannot resolve;
-    ``policy``: `Settings.fit_scene`."""
+    ``policy``: `Settings.fit_scene`; ``smooth``: the source or the target is a mirror or a smooth
+    glass (`ModelSpec.smooth`), which shows a point light as a point at most."""
     if policy == "as-given":
         return FitScene(scene)
     noise = source_noise(render, scene)
+    if smooth and policy == "auto" and environment_ok and scene.environment is None and not scene.views:
+        return _environment(render, scene, noise, limit, "a perfectly smooth material (it shows a point light as "
+                                                         "a point at most)") or FitScene(scene, noise=noise,
+                                                                                          scene_noise=noise)
     if noise <= GOAL or scene.views:
         return FitScene(scene, noise=noise, scene_noise=noise)
     spp = _samples_for(noise, scene.spp)
@@ -68,15 +73,24 @@ def choose(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, enviro
             return FitScene(more, f"the source's render noise at {scene.spp} spp is {noise:.1%}: fitted at {spp} spp "
                                   f"({n:.1%})", n, noise)
     if policy == "auto" and environment_ok and scene.environment is None:
-        env = scene.model_copy(update={"lights": [EnvironmentLight(type="environment", map="studio")],
-                                       "name": f"{scene.name} under the studio environment"})
-        n = source_noise(render, env)
-        if n > GOAL:
-            spp = min(_samples_for(n, env.spp), env.spp * MAX_SPP_FACTOR)
-            env = env.with_(spp=spp)
-            n = source_noise(render, env)
-        if n <= limit:
-            return FitScene(env, f"the source's render noise at {scene.spp} spp is {noise:.0%} (a highlight smaller "
-                                 f"than a pixel): fitted under the studio environment at {env.spp} spp ({n:.1%}), "
-                                 "which a near-mirror reflects whole", n, noise)
+        found = _environment(render, scene, noise, limit, f"the source's render noise at {scene.spp} spp is "
+                                                          f"{noise:.0%} (a highlight smaller than a pixel)")
+        if found is not None:
+            return found
     return FitScene(scene, noise=noise, scene_noise=noise)
+
+
+def _environment(render, scene: ProbeScene, noise: float, limit: float, why: str) -> FitScene | None:
+    """The scene under the studio environment, with the samples that bring the source's noise to
+    GOAL (up to MAX_SPP_FACTOR times more), or None when it cannot resolve the source either."""
+    env = scene.model_copy(update={"lights": [EnvironmentLight(type="environment", map="studio")],
+                                   "name": f"{scene.name} under the studio environment"})
+    n = source_noise(render, env)
+    if n > GOAL:
+        spp = min(_samples_for(n, env.spp), env.spp * MAX_SPP_FACTOR)
+        env = env.with_(spp=spp)
+        n = source_noise(render, env)
+    if n > limit:
+        return None
+    return FitScene(env, f"{why}: fitted under the studio environment at {env.spp} spp ({n:.1%}), which a "
+                         "near-mirror reflects whole", n, noise)

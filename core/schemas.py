@@ -30,6 +30,9 @@ class ParamSpec(_Strict):
                           "down to a mirror's: a start there renders a sub-pixel highlight, nearly black, and wins "
                           "on error while no gradient leads out of it). None: the bounds.")
     fit: bool = Field(True, description="Fitted by default when it is the target (choices never are).")
+    fit_when_carried: bool = Field(False, description="Held by default (`fit` false), but fitted when the source's "
+                                                      "neutral reading carries a value for it: a coat, a sheen or "
+                                                      "anisotropy the source has.")
     explore: bool = Field(False, description="Choice only: when the source's reading does not say which value, the "
                                              "fit tries each at the coarse level and keeps the best (a microfacet "
                                              "distribution).")
@@ -136,6 +139,9 @@ class ModelSpec(_Strict):
     lobes: dict[Literal["diffuse", "specular"], LobeSpec] = Field(
         default_factory=dict, description="Empty when the adapter cannot isolate lobes (two-stage then falls back)."
     )
+    smooth: bool = Field(False, description="Its reflection is perfectly smooth (a mirror, a smooth glass): a point "
+                                            "light shows in it as a point at most, so it is seen, and fitted, "
+                                            "under an environment.")
     derived: tuple[str, ...] = Field((), description="Quantities the adapter derives from the parameters "
                                                      "(Adapter.derived: a conductor's reflectivity), for reports and "
                                                      "experiment plots.")

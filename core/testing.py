@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from .metrics import relative_rmse
-from .scene import PointLight, ProbeScene
+from .scene import EnvironmentLight, PointLight, ProbeScene
 
 
 @dataclass
@@ -190,10 +190,17 @@ class AdapterContract:
                 assert set(conv) <= set(spec.names), (name, set(conv) - set(spec.names))
                 spec.complete({k: spec.param(k).clip(v) for k, v in conv.items()})
 
+    def _scene_for(self, model: str) -> ProbeScene:
+        """The probe scene, under the studio environment for a smooth model (`ModelSpec.smooth`),
+        where the adapter renders one: a point light shows in a mirror as a point at most."""
+        if self.adapter.models[model].smooth and "environment" in self.adapter.light_types:
+            return self.scene.model_copy(update={"lights": [EnvironmentLight(type="environment", map="studio")]})
+        return self.scene
+
     def test_render_shape_dtype_finite_black_background(self):
         n = self.scene.resolution
         for model in self.adapter.models:
-            img = self.adapter.render(model, self._params(model), self.scene)
+            img = self.adapter.render(model, self._params(model), self._scene_for(model))
             assert isinstance(img, np.ndarray), f"{model}: not a numpy array"
             assert img.shape == (n, n, 3), f"{model}: shape {img.shape}, expected {(n, n, 3)}"
             assert img.dtype == np.float32, f"{model}: dtype {img.dtype}, expected float32"

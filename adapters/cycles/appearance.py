@@ -8,6 +8,8 @@ import math
 
 from brdfremap.core.appearance import (
     Appearance,
+    Coat,
+    Sheen,
     as_rgb,
     conductor_f0,
     dielectric_f0,
@@ -23,12 +25,7 @@ def appearance(model: str, p: dict[str, Value]) -> Appearance | None:
     alpha = max(float(p.get("roughness", 0.0)) ** 2, 1e-4)  # type: ignore[arg-type]
     dist = _DIST.get(str(p.get("distribution")))
     if model == "principled":
-        base, m = as_rgb(p["base_color"]), float(p["metallic"])  # type: ignore[arg-type]
-        if m >= 0.5:
-            return Appearance(kind="conductor", alpha=alpha, distribution=dist, specular=base)  # type: ignore
-        f0 = min(dielectric_f0(float(p["ior"])) * 2.0 * float(p["specular_ior_level"]), 1.0)  # type: ignore
-        return Appearance(kind="dielectric", alpha=alpha, distribution=dist, specular=(f0,) * 3,  # type: ignore
-                          diffuse=tuple(c * (1.0 - m) for c in base), ior=ior_from_f0(f0))  # type: ignore[arg-type]
+        return _principled(p, alpha, dist)
     if model == "glossy":
         return Appearance(kind="conductor", alpha=alpha, distribution=dist, specular=as_rgb(p["color"]))  # type: ignore
     if model == "metallic":
@@ -38,6 +35,52 @@ def appearance(model: str, p: dict[str, Value]) -> Appearance | None:
     if model == "diffuse":
         return Appearance(kind="dielectric", diffuse=as_rgb(p["color"]))
     return None
+
+
+def _principled(p: dict[str, Value], alpha: float, dist) -> Appearance:
+    base, m = as_rgb(p["base_color"]), float(p["metallic"])  # type: ignore[arg-type]
+    extra = _layers(p)
+    if m >= 0.5:
+        return Appearance(kind="conductor", alpha=alpha, distribution=dist, specular=base, **extra)  # type: ignore
+    f0 = min(dielectric_f0(float(p["ior"])) * 2.0 * float(p["specular_ior_level"]), 1.0)  # type: ignore
+    return Appearance(kind="dielectric", alpha=alpha, distribution=dist, specular=(f0,) * 3,  # type: ignore
+                      diffuse=tuple(c * (1.0 - m) for c in base), ior=ior_from_f0(f0), **extra)  # type: ignore
+
+
+def _layers(p: dict[str, Value]) -> dict:
+    """The Principled BSDF's coat, sheen, anisotropy and transmission, where it has them."""
+    out: dict = {"transmission": float(p.get("transmission_weight", 0.0))}  # type: ignore[arg-type]
+    if out["transmission"] > 0.0:
+        out["transmittance"] = as_rgb(p["base_color"])
+    if float(p.get("anisotropic", 0.0)) > 0.0:  # type: ignore[arg-type]
+        out.update(anisotropy=float(p["anisotropic"]), rotation=float(p["anisotropic_rotation"]))  # type: ignore
+    if float(p.get("coat_weight", 0.0)) > 0.0:  # type: ignore[arg-type]
+        out["coat"] = Coat(weight=float(p["coat_weight"]), alpha=max(float(p["coat_roughness"]) ** 2, 1e-4),  # type: ignore
+                           ior=max(float(p["coat_ior"]), 1.001), tint=as_rgb(p["coat_tint"]))  # type: ignore
+    if float(p.get("sheen_weight", 0.0)) > 0.0:  # type: ignore[arg-type]
+        out["sheen"] = Sheen(weight=float(p["sheen_weight"]), tint=as_rgb(p["sheen_tint"]),  # type: ignore
+                             roughness=float(p["sheen_roughness"]))  # type: ignore[arg-type]
+    return out
+
+
+def _layer_params(a: Appearance) -> dict[str, Value]:
+    """The Principled BSDF's inputs for a reading's coat, sheen, anisotropy and transmission: only
+    those it has (an input the reading leaves out stays held at its default)."""
+    out: dict[str, Value] = {}
+    if a.anisotropy > 0.0:
+        out.update(anisotropic=a.anisotropy, anisotropic_rotation=a.rotation % 1.0)
+    if a.coat is not None:
+        out.update(coat_weight=a.coat.weight, coat_roughness=math.sqrt(a.coat.alpha), coat_ior=a.coat.ior,
+                   coat_tint=a.coat.tint)
+    if a.sheen is not None:
+        out.update(sheen_weight=min(a.sheen.weight, 1.0), sheen_tint=a.sheen.tint, sheen_roughness=a.sheen.roughness)
+    if a.transmission > 0.0:
+        out["transmission_weight"] = a.transmission
+        if a.kind == "dielectric" and max(a.diffuse) == 0.0:
+            out["base_color"] = a.transmittance  # a clear glass: Base Color tints what is transmitted
+        if a.ior is not None:
+            out["ior"] = a.ior
+    return out
 
 
 _CHOICES = {"principled": ("ggx",), "glossy": ("beckmann", "ggx"), "metallic": ("beckmann", "ggx")}
@@ -54,7 +97,10 @@ def from_appearance(model: str, a: Appearance, base: dict[str, Value]) -> dict[s
         out["distribution"] = a.distribution  # the source's single-scattering lobe, not multi_ggx's extra energy
     if model == "principled":
         out.update(base_color=a.specular if metal else a.diffuse, metallic=1.0 if metal else 0.0)
-        if not metal:
+        out.update(_layer_params(a))
+        if not metal and a.transmission > 0.0:
+            out["specular_ior_level"] = 0.5  # a glass's F0 is its IOR's
+        elif not metal:
             f0 = float(sum(a.specular)) / 3
             out["specular_ior_level"] = 0.5 * f0 / dielectric_f0(float(base["ior"]))  # type: ignore[arg-type]
     elif model == "glossy":
@@ -74,6 +120,8 @@ def model_for(a: Appearance) -> tuple[str, dict[str, Value], str]:
     of its distribution (a conductor's Fresnel from its complex IOR: the Glossy BSDF has none, and
     matched the probe of Mitsuba's copper to its noise but was 15 % off under the rim light, the
     Metallic 2.7 %), a diffuse-only material a Diffuse BSDF, anything else the Principled BSDF."""
+    if a.coat is not None or a.sheen is not None or a.anisotropy > 0.0 or a.transmission > 0.0:
+        return "principled", {}, "coated, sheen, anisotropic or transmissive: the Principled BSDF"
     if a.kind == "conductor":
         dist = a.distribution if a.distribution in ("beckmann", "ggx") else "ggx"
         return "metallic", {"distribution": dist}, f"a metal: the Metallic BSDF ({dist}), a conductor's Fresnel"

@@ -10,6 +10,7 @@ NODES: dict[str, tuple[str, dict[str, str], dict[str, str]]] = {
     "principled": ("ShaderNodeBsdfPrincipled", {
         "base_color": "Base Color", "metallic": "Metallic", "roughness": "Roughness", "ior": "IOR",
         "specular_ior_level": "Specular IOR Level", "specular_tint": "Specular Tint",
+        "anisotropic": "Anisotropic", "anisotropic_rotation": "Anisotropic Rotation",
         "coat_weight": "Coat Weight", "coat_roughness": "Coat Roughness", "coat_ior": "Coat IOR",
         "coat_tint": "Coat Tint", "sheen_weight": "Sheen Weight", "sheen_roughness": "Sheen Roughness",
         "sheen_tint": "Sheen Tint", "diffuse_roughness": "Diffuse Roughness", "subsurface_weight": "Subsurface Weight",

@@ -15,7 +15,7 @@ from brdfremap.core.schemas import LobeSpec, ModelSpec, ParamSpec
 PASS_LOBES_PRINCIPLED = {
     "diffuse": LobeSpec(params=("base_color", "metallic")),
     "specular": LobeSpec(params=("base_color", "metallic", "roughness", "ior", "specular_ior_level", "specular_tint",
-                                 "coat_weight", "coat_roughness")),
+                                 "anisotropic", "anisotropic_rotation", "coat_weight", "coat_roughness")),
 }
 
 
@@ -27,6 +27,7 @@ def _unit(name, default, fit=True, desc="", upper=1.0, **kw):
 # the dielectric's IOR and Specular IOR Level no longer reach the image (checked: identical
 # renders in Blender 5.0; tests/test_cycles.py keeps checking it).
 METAL = {"metallic": 1.0}
+ISOTROPIC = {"anisotropic": 0.0}
 NO_COAT, NO_SHEEN, NO_SSS, NO_FILM = ({"coat_weight": 0.0}, {"sheen_weight": 0.0}, {"subsurface_weight": 0.0},
                                       {"thin_film_thickness": 0.0})
 
@@ -45,14 +46,18 @@ PRINCIPLED = ModelSpec(
         _unit("specular_ior_level", 0.5, upper=1.0, desc="Specular IOR Level (0.5 = the IOR as given).",
               inert_when=METAL),
         ParamSpec(name="specular_tint", kind="rgb", default=(1.0, 1.0, 1.0), fit=False, description="Specular Tint."),
-        _unit("coat_weight", 0.0, fit=False, desc="Coat Weight."),
-        _unit("coat_roughness", 0.03, fit=False, desc="Coat Roughness.", inert_when=NO_COAT),
+        _unit("anisotropic", 0.0, fit=False, fit_when_carried=True, desc="Anisotropic (the probe's tangent runs "
+              "along the sphere's latitudes, its pole at the image's top)."),
+        _unit("anisotropic_rotation", 0.0, fit=False, fit_when_carried=True, inert_when=ISOTROPIC,
+              desc="Anisotropic Rotation (a fraction of a turn of the tangent about the normal)."),
+        _unit("coat_weight", 0.0, fit=False, fit_when_carried=True, desc="Coat Weight."),
+        _unit("coat_roughness", 0.03, fit=False, fit_when_carried=True, desc="Coat Roughness.", inert_when=NO_COAT),
         ParamSpec(name="coat_ior", kind="scalar", lower=1.0, upper=4.0, default=1.5, fit=False, inert_when=NO_COAT,
                   description="Coat IOR."),
         ParamSpec(name="coat_tint", kind="rgb", default=(1.0, 1.0, 1.0), fit=False, inert_when=NO_COAT,
                   description="Coat Tint (the colour light takes through the coat)."),
-        _unit("sheen_weight", 0.0, fit=False, desc="Sheen Weight."),
-        _unit("sheen_roughness", 0.5, fit=False, desc="Sheen Roughness.", inert_when=NO_SHEEN),
+        _unit("sheen_weight", 0.0, fit=False, fit_when_carried=True, desc="Sheen Weight."),
+        _unit("sheen_roughness", 0.5, fit=False, fit_when_carried=True, desc="Sheen Roughness.", inert_when=NO_SHEEN),
         ParamSpec(name="sheen_tint", kind="rgb", default=(1.0, 1.0, 1.0), fit=False, inert_when=NO_SHEEN,
                   description="Sheen Tint."),
         _unit("diffuse_roughness", 0.0, fit=False, desc="Diffuse Roughness (0: Lambertian)."),
@@ -75,9 +80,10 @@ PRINCIPLED = ModelSpec(
     ),
     lobes=PASS_LOBES_PRINCIPLED,
 )
-"""Every reflection input of Blender 5.0's Principled BSDF but Anisotropic and its Rotation (the
-probe sphere has no tangent frame) and Emission (the probe measures reflection). Past the first
-nine they are held (`--fix` them): a value a source carries is rendered, none is fitted."""
+"""Every reflection input of Blender 5.0's Principled BSDF but Emission (the probe measures
+reflection) and Tangent (the probe's own: along the latitudes). Past the first nine they are held
+(`--fix` them), and a value a source carries is rendered; the coat's, sheen's and anisotropy's
+weight and roughness are fitted when the source has that lobe (`fit_when_carried`)."""
 
 GLOSSY = ModelSpec(
     name="glossy",

@@ -26,6 +26,7 @@ from brdfremap.core.schemas import Value
 
 from . import appearance as _appearance
 from .appearance import EXT_IOR
+from .blend import SLOTS, blend_appearance, component
 from .bsdfs import conductor_preset, register_bsdfs, trim_scale
 from .models import MODELS
 from .variant import as_dict, choose_variant
@@ -49,68 +50,139 @@ def emitters(scene: ProbeScene) -> dict[str, Any]:
     return out
 
 
+def _conductor(kind: str, p: dict[str, Value]) -> dict[str, Any]:
+    d: dict[str, Any] = {"type": kind, "specular_reflectance": _rgb(p["specular_reflectance"])}
+    if p["material"] == "none":
+        d.update(eta=_rgb(p["eta"]), k=_rgb(p["k"]))
+    else:
+        d["material"] = p["material"]
+    return d
+
+
+def _roughconductor(p: dict[str, Value]) -> dict[str, Any]:
+    d = {**_conductor("roughconductor", p), "distribution": p["distribution"]}
+    if p["anisotropy"] == "anisotropic":
+        d.update(alpha_u=p["alpha_u"], alpha_v=p["alpha_v"])
+    else:
+        d["alpha"] = p["alpha"]
+    return d
+
+
+def _plastic(kind: str, p: dict[str, Value]) -> dict[str, Any]:
+    d = {"type": kind, "int_ior": p["int_ior"], "ext_ior": EXT_IOR, "nonlinear": False,
+         "diffuse_reflectance": _rgb(p["diffuse_reflectance"]),
+         "specular_reflectance": _rgb(p["specular_reflectance"])}
+    if kind == "roughplastic":
+        d.update(distribution=p["distribution"], alpha=p["alpha"])
+    return d
+
+
+def _dielectric(kind: str, p: dict[str, Value]) -> dict[str, Any]:
+    d = {"type": kind, "int_ior": p["int_ior"], "ext_ior": EXT_IOR,
+         "specular_reflectance": _rgb(p["specular_reflectance"]),
+         "specular_transmittance": _rgb(p["specular_transmittance"])}
+    if kind == "roughdielectric":
+        d.update(distribution=p["distribution"], alpha=p["alpha"])
+    return d
+
+
+def _legacy(model: str, p: dict[str, Value]) -> dict[str, Any]:
+    """Mitsuba 0.5's Ward and Phong (this project's plugins)."""
+    d = {"type": model, "ensure_energy_conservation": p["ensure_energy_conservation"] == "true",
+         "specular_reflectance": _rgb(p["specular_reflectance"]),
+         "diffuse_reflectance": _rgb(p["diffuse_reflectance"])}
+    if model == "ward":
+        d.update(variant=p["variant"], alpha=p["alpha"])
+    else:
+        d["exponent"] = p["exponent"]
+    return d
+
+
+def _as_conductor(p: dict[str, Value]) -> dict[str, Any]:
+    d = {"type": "ashikhmin_shirley", "form": "conductor", "alpha": p["alpha"],
+         "specular_reflectance": _rgb(p["specular_reflectance"])}
+    if p["material"] == "none":
+        d.update(eta=_rgb(p["eta"]), k=_rgb(p["k"]))
+    elif p["material"] == "reflectivity":
+        d.update(reflectivity=_rgb(p["reflectivity"]), edge_tint=_rgb(p["edge_tint"]))
+    else:
+        d["material"] = p["material"]
+    return d
+
+
+def _as_plastic(p: dict[str, Value]) -> dict[str, Any]:
+    return {"type": "ashikhmin_shirley", "form": "plastic", "alpha": p["alpha"], "int_ior": p["int_ior"],
+            "ext_ior": EXT_IOR, "diffuse_reflectance": _rgb(p["diffuse_reflectance"]),
+            "specular_reflectance": _rgb(p["specular_reflectance"])}
+
+
+def _principled(p: dict[str, Value]) -> dict[str, Any]:
+    d: dict[str, Any] = {"type": "principled", "base_color": _rgb(p["base_color"])}
+    d.update({ps.name: p[ps.name] for ps in MODELS["principled"].parameters if ps.name != "base_color"})
+    return d
+
+
+def _blend(p: dict[str, Value]) -> dict[str, Any]:
+    d: dict[str, Any] = {"type": "blendbsdf", "weight": p["weight"]}
+    for slot in SLOTS:
+        model, sub = component(slot, p)
+        d[slot] = BUILDERS[model](sub)
+    return d
+
+
+BUILDERS = {
+    "roughconductor": _roughconductor,
+    "conductor": lambda p: _conductor("conductor", p),
+    "roughplastic": lambda p: _plastic("roughplastic", p),
+    "plastic": lambda p: _plastic("plastic", p),
+    "diffuse": lambda p: {"type": "diffuse", "reflectance": _rgb(p["reflectance"])},
+    "dielectric": lambda p: _dielectric("dielectric", p),
+    "roughdielectric": lambda p: _dielectric("roughdielectric", p),
+    "thindielectric": lambda p: _dielectric("thindielectric", p),
+    "principled": _principled,
+    "ward": lambda p: _legacy("ward", p),
+    "phong": lambda p: _legacy("phong", p),
+    "ashikhmin_shirley": _as_conductor,
+    "ashikhmin_shirley_plastic": _as_plastic,
+    "blendbsdf": _blend,
+}
+"""Each model's Mitsuba BSDF dictionary from its complete parameters."""
+
+
 def bsdf_dict(model: str, p: dict[str, Value]) -> dict[str, Any]:
     """The Mitsuba BSDF dictionary of a model and its complete parameters."""
-    if model == "roughconductor":
-        d = {"type": "roughconductor", "distribution": p["distribution"], "alpha": p["alpha"],
-             "specular_reflectance": _rgb(p["specular_reflectance"])}
-        if p["material"] == "none":
-            d.update(eta=_rgb(p["eta"]), k=_rgb(p["k"]))
-        else:
-            d["material"] = p["material"]
-        return d
-    if model == "roughplastic":
-        return {"type": "roughplastic", "distribution": p["distribution"], "alpha": p["alpha"],
-                "int_ior": p["int_ior"], "ext_ior": EXT_IOR, "nonlinear": False,
-                "diffuse_reflectance": _rgb(p["diffuse_reflectance"]),
-                "specular_reflectance": _rgb(p["specular_reflectance"])}
-    if model == "diffuse":
-        return {"type": "diffuse", "reflectance": _rgb(p["reflectance"])}
-    if model in ("ward", "phong"):
-        d = {"type": model, "ensure_energy_conservation": p["ensure_energy_conservation"] == "true",
-             "specular_reflectance": _rgb(p["specular_reflectance"]),
-             "diffuse_reflectance": _rgb(p["diffuse_reflectance"])}
-        if model == "ward":
-            d.update(variant=p["variant"], alpha=p["alpha"])
-        else:
-            d["exponent"] = p["exponent"]
-        return d
-    if model == "ashikhmin_shirley":
-        d = {"type": "ashikhmin_shirley", "form": "conductor", "alpha": p["alpha"],
-             "specular_reflectance": _rgb(p["specular_reflectance"])}
-        if p["material"] == "none":
-            d.update(eta=_rgb(p["eta"]), k=_rgb(p["k"]))
-        elif p["material"] == "reflectivity":
-            d.update(reflectivity=_rgb(p["reflectivity"]), edge_tint=_rgb(p["edge_tint"]))
-        else:
-            d["material"] = p["material"]
-        return d
-    if model == "ashikhmin_shirley_plastic":
-        return {"type": "ashikhmin_shirley", "form": "plastic", "alpha": p["alpha"], "int_ior": p["int_ior"],
-                "ext_ior": EXT_IOR, "diffuse_reflectance": _rgb(p["diffuse_reflectance"]),
-                "specular_reflectance": _rgb(p["specular_reflectance"])}
-    if model == "principled":
-        d: dict[str, Any] = {"type": "principled", "base_color": _rgb(p["base_color"])}
-        for name in ("metallic", "roughness", "specular", "spec_tint", "anisotropic", "sheen", "sheen_tint",
-                     "clearcoat", "clearcoat_gloss"):
-            d[name] = p[name]
-        return d
-    raise ConfigError(f"mitsuba adapter has no model {model!r}")
+    if model not in BUILDERS:
+        raise ConfigError(f"mitsuba adapter has no model {model!r}")
+    return BUILDERS[model](p)
+
+
+RELATIVE_IOR = {"roughplastic", "plastic", "dielectric", "roughdielectric", "thindielectric"}
+"""Mitsuba's plastics and glasses traverse eta = int_ior / ext_ior."""
 
 
 def traverse_values(model: str, spec, p: dict[str, Value]) -> dict[str, Any]:
     """The BSDF's traverse keys (relative to the BSDF) and values for the active numeric parameters."""
+    if model == "blendbsdf":
+        return _blend_traverse(p)
     out: dict[str, Any] = {}
     for ps in spec.parameters:
         if ps.kind == "choice" or not spec.is_active(ps.name, p):
             continue
         v = p[ps.name]
         out[ps.name] = list(v) if isinstance(v, tuple) else float(v)  # type: ignore[arg-type]
-    if model == "roughplastic":
+    if "int_ior" in out and model in RELATIVE_IOR:
         out["eta"] = out.pop("int_ior") / EXT_IOR
     if model == "ashikhmin_shirley" and "reflectivity" in out:
         eta, k = eta_k_from_reflectivity(out.pop("reflectivity"), out.pop("edge_tint"))
         out["eta"], out["k"] = [float(x) for x in eta], [float(x) for x in k]
+    return out
+
+
+def _blend_traverse(p: dict[str, Value]) -> dict[str, Any]:
+    out: dict[str, Any] = {"weight": float(p["weight"])}  # type: ignore[arg-type]
+    for slot in SLOTS:
+        model, sub = component(slot, p)
+        out.update({f"{slot}.{k}": v for k, v in traverse_values(model, MODELS[model], sub).items()})
     return out
 
 
@@ -134,21 +206,39 @@ def energy_notes(model: str, p: dict[str, Value]) -> list[str]:
     return notes
 
 
-def bsdf_xml(model: str, p: dict[str, Value]) -> str:
-    """The material as a Mitsuba 3 XML ``<bsdf>`` element."""
+ONE_SIDED = {"roughconductor", "conductor", "roughplastic", "plastic", "diffuse", "principled", "ward", "phong",
+             "ashikhmin_shirley", "ashikhmin_shirley_plastic", "blendbsdf"}
+"""Models Mitsuba shades on the front side only: written inside a `twosided` (Blender's and
+MaterialX's surfaces are two-sided; the probe sees front faces only, so the fit is the same)."""
+
+
+def bsdf_xml(model: str, p: dict[str, Value], two_sided: bool = True) -> str:
+    """The material as a Mitsuba 3 XML ``<bsdf>`` element; an opaque one inside a ``twosided``."""
     d = bsdf_dict(model, p)
-    lines = [f"<bsdf type={quoteattr(d.pop('type'))}>"]
+    if two_sided and model in ONE_SIDED:
+        d = {"type": "twosided", "bsdf": d}
+    return "\n".join(_xml_element(d, None, "")) + "\n"
+
+
+def _xml_element(d: dict[str, Any], name: str | None, indent: str) -> list[str]:
+    named = f" name={quoteattr(name)}" if name else ""
+    lines = [f"{indent}<bsdf type={quoteattr(d['type'])}{named}>"]
+    inner = indent + "    "
     for key, v in d.items():
-        if isinstance(v, dict):
-            lines.append(f'    <rgb name="{key}" value="{", ".join(f"{x:.6g}" for x in v["value"])}"/>')
+        if key == "type":
+            continue
+        if isinstance(v, dict) and v.get("type") == "rgb":
+            lines.append(f'{inner}<rgb name="{key}" value="{", ".join(f"{x:.6g}" for x in v["value"])}"/>')
+        elif isinstance(v, dict):
+            lines += _xml_element(v, key, inner)
         elif isinstance(v, bool):
-            lines.append(f'    <boolean name="{key}" value="{str(v).lower()}"/>')
+            lines.append(f'{inner}<boolean name="{key}" value="{str(v).lower()}"/>')
         elif isinstance(v, str):
-            lines.append(f'    <string name="{key}" value={quoteattr(v)}/>')
+            lines.append(f'{inner}<string name="{key}" value={quoteattr(v)}/>')
         else:
-            lines.append(f'    <float name="{key}" value="{v:.6g}"/>')
-    lines.append("</bsdf>")
-    return "\n".join(lines) + "\n"
+            lines.append(f'{inner}<float name="{key}" value="{v:.6g}"/>')
+    lines.append(f"{indent}</bsdf>")
+    return lines
 
 
 def _reraise_interrupt(exc: Exception) -> None:
@@ -164,8 +254,17 @@ def _reraise_interrupt(exc: Exception) -> None:
         seen = seen.__cause__ or seen.__context__
 
 
+def probe_transform(mi, scene: ProbeScene):
+    """The probe sphere's placement, its pole along the image's up (+y): dp/du (an anisotropic
+    BSDF's tangent) then runs along the latitudes, as the Cycles probe's tangent does."""
+    s = scene.sphere
+    return (mi.ScalarTransform4f().translate(list(s.center)) @ mi.ScalarTransform4f().rotate([1, 0, 0], -90.0)
+            @ mi.ScalarTransform4f().scale(s.radius))
+
+
 class MitsubaAdapter(Adapter):
     name = "mitsuba"
+    version = "2"  # 2: the probe sphere's pole along +y (its tangent frame)
     summary = "Mitsuba 3, in process (llvm_ad_rgb when a working libLLVM is found, else scalar_rgb)"
     install_hint = "pip install 'brdf-remap[mitsuba]'"
     models = MODELS
@@ -236,7 +335,7 @@ class MitsubaAdapter(Adapter):
                          "rfilter": {"type": "box"}, "pixel_format": "rgb"},
                 "sampler": {"type": "multijitter", "sample_count": scene.spp, "seed": scene.seed},
             },
-            "probe": {"type": "sphere", "center": list(scene.sphere.center), "radius": scene.sphere.radius,
+            "probe": {"type": "sphere", "to_world": probe_transform(mi, scene),
                       "bsdf": bsdf_dict(model, params)},
             **emitters(scene),
         }
@@ -289,13 +388,13 @@ class MitsubaAdapter(Adapter):
 
     def derived(self, model: str, params: dict[str, Value]) -> dict[str, Value]:
         p = params
-        if model in ("roughconductor", "ashikhmin_shirley"):
+        if model in ("roughconductor", "conductor", "ashikhmin_shirley"):
             if p["material"] == "reflectivity":
                 return {"reflectivity": p["reflectivity"], "edge_tint": p["edge_tint"]}
             eta, k = (p["eta"], p["k"]) if p["material"] == "none" else conductor_preset(str(p["material"]))
             r, g = reflectivity_edge_tint(eta, k)
             return {"reflectivity": as_rgb(r), "edge_tint": as_rgb(g)}
-        if model in ("roughplastic", "ashikhmin_shirley_plastic"):
+        if model in ("roughplastic", "plastic", "ashikhmin_shirley_plastic"):
             return {"specular_f0": dielectric_f0(float(p["int_ior"]) / EXT_IOR)}  # type: ignore[arg-type]
         if model in ("ward", "phong"):
             s = trim_scale(p["specular_reflectance"], p["diffuse_reflectance"]) \
@@ -306,6 +405,8 @@ class MitsubaAdapter(Adapter):
         return {}
 
     def appearance(self, model: str, params: dict[str, Value]) -> Appearance | None:
+        if model == "blendbsdf":
+            return blend_appearance(params, self.appearance)
         return _appearance.appearance(model, params, conductor_preset)
 
     def from_appearance(self, model: str, appearance: Appearance, base: dict[str, Value]) -> dict[str, Value]:

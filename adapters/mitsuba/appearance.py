@@ -8,6 +8,10 @@ from collections.abc import Callable
 
 from brdfremap.core.appearance import (
     Appearance,
+    Coat,
+    Sheen,
+    alphas_from_anisotropy,
+    anisotropy_from_alphas,
     as_rgb,
     conductor_f0,
     dielectric_f0,
@@ -32,19 +36,31 @@ def _conductor(p: dict[str, Value], preset: Callable[[str], EtaK]) -> EtaK:
     return (p["eta"], p["k"]) if p["material"] == "none" else preset(str(p["material"]))  # type: ignore[return-value]
 
 
+SMOOTH_ALPHA = 1e-4
+"""The α a smooth (delta) BSDF is read with: the lowest a rough model takes."""
+GLASSES = ("dielectric", "roughdielectric", "thindielectric")
+
+
 def appearance(model: str, p: dict[str, Value], preset: Callable[[str], EtaK]) -> Appearance | None:
     """How an exporter reads this Mitsuba material; None for a model without a reading."""
-    if model in ("roughconductor", "ashikhmin_shirley"):
+    if model in ("roughconductor", "conductor", "ashikhmin_shirley"):
         eta, k = _conductor(p, preset)
         dist = p.get("distribution") if model == "roughconductor" else None
-        return Appearance(kind="conductor", alpha=float(p["alpha"]), distribution=dist,  # type: ignore[arg-type]
-                          specular=_mul(conductor_f0(eta, k), p["specular_reflectance"]), eta=tuple(eta), k=tuple(k))
-    if model in ("roughplastic", "ashikhmin_shirley_plastic"):
+        alpha, aniso, rot = _alpha(p)
+        return Appearance(kind="conductor", alpha=alpha, distribution=dist,  # type: ignore[arg-type]
+                          specular=_mul(conductor_f0(eta, k), p["specular_reflectance"]), eta=tuple(eta), k=tuple(k),
+                          anisotropy=aniso, rotation=rot)
+    if model in ("roughplastic", "plastic", "ashikhmin_shirley_plastic"):
         ior = float(p["int_ior"]) / EXT_IOR  # type: ignore[arg-type]
         dist = p.get("distribution") if model == "roughplastic" else None
-        return Appearance(kind="dielectric", alpha=float(p["alpha"]), distribution=dist,  # type: ignore[arg-type]
+        return Appearance(kind="dielectric", alpha=_alpha(p)[0], distribution=dist,  # type: ignore[arg-type]
                           specular=_mul((dielectric_f0(ior),) * 3, p["specular_reflectance"]),
                           diffuse=tuple(p["diffuse_reflectance"]), ior=ior)  # type: ignore[arg-type]
+    if model in GLASSES:
+        ior = float(p["int_ior"]) / EXT_IOR  # type: ignore[arg-type]
+        return Appearance(kind="dielectric", alpha=_alpha(p)[0], distribution=p.get("distribution"),  # type: ignore
+                          specular=_mul((dielectric_f0(ior),) * 3, p["specular_reflectance"]), ior=ior,
+                          transmission=1.0, transmittance=as_rgb(p["specular_transmittance"]))
     if model == "diffuse":
         return Appearance(kind="dielectric", diffuse=tuple(p["reflectance"]))  # type: ignore[arg-type]
     if model in ("ward", "phong"):
@@ -55,14 +71,41 @@ def appearance(model: str, p: dict[str, Value], preset: Callable[[str], EtaK]) -
                           specular=tuple(min(float(x), 1.0) for x in p["specular_reflectance"]),  # type: ignore
                           diffuse=tuple(p["diffuse_reflectance"]))  # type: ignore[arg-type]
     if model == "principled":
-        m, base = float(p["metallic"]), as_rgb(p["base_color"])  # type: ignore[arg-type]
-        alpha = max(float(p["roughness"]) ** 2, 1e-4)  # type: ignore[arg-type]
-        if m >= 0.5:
-            return Appearance(kind="conductor", alpha=alpha, distribution="ggx", specular=base)  # type: ignore
-        f0 = 0.08 * float(p["specular"])  # type: ignore[arg-type]
-        return Appearance(kind="dielectric", alpha=alpha, distribution="ggx", specular=(f0,) * 3,
-                          diffuse=tuple(c * (1.0 - m) for c in base), ior=ior_from_f0(f0))  # type: ignore[arg-type]
+        return _principled(p)
     return None
+
+
+def _alpha(p: dict[str, Value]) -> tuple[float, float, float]:
+    """(α, anisotropy, rotation) of a rough model's roughness; a smooth one's lowest α."""
+    if p.get("anisotropy") == "anisotropic":
+        return anisotropy_from_alphas(float(p["alpha_u"]), float(p["alpha_v"]))  # type: ignore[arg-type]
+    return float(p.get("alpha", SMOOTH_ALPHA)), 0.0, 0.0  # type: ignore[arg-type]
+
+
+def _principled(p: dict[str, Value]) -> Appearance:
+    """Disney's parameters read as layers: clearcoat is a GTR1 lobe at IOR 1.5 scaled by 1/4 (a
+    quarter of a full coat), its α from 0.1 (gloss 0) to 0.001 (gloss 1); sheen tints towards the
+    base colour's hue."""
+    m, base = float(p["metallic"]), as_rgb(p["base_color"])  # type: ignore[arg-type]
+    alpha = max(float(p["roughness"]) ** 2, 1e-4)  # type: ignore[arg-type]
+    extra: dict = {"anisotropy": float(p["anisotropic"]), "transmission": float(p["spec_trans"])}  # type: ignore
+    if float(p["clearcoat"]) > 0.0:  # type: ignore[arg-type]
+        gloss = float(p["clearcoat_gloss"])  # type: ignore[arg-type]
+        extra["coat"] = Coat(weight=0.25 * float(p["clearcoat"]), alpha=0.1 + (0.001 - 0.1) * gloss)  # type: ignore
+    if float(p["sheen"]) > 0.0:  # type: ignore[arg-type]
+        t = float(p["sheen_tint"])  # type: ignore[arg-type]
+        extra["sheen"] = Sheen(weight=float(p["sheen"]), tint=as_rgb([1 - t + t * h for h in _hue(base)]))  # type: ignore
+    if m >= 0.5:
+        return Appearance(kind="conductor", alpha=alpha, distribution="ggx", specular=base, **extra)  # type: ignore
+    f0 = 0.08 * float(p["specular"])  # type: ignore[arg-type]
+    return Appearance(kind="dielectric", alpha=alpha, distribution="ggx", specular=(f0,) * 3,
+                      diffuse=tuple(c * (1.0 - m) for c in base), ior=ior_from_f0(f0), **extra)  # type: ignore
+
+
+def _hue(c) -> tuple[float, float, float]:
+    """A colour divided by its luminance (Disney's tint colour)."""
+    lum = 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+    return as_rgb([x / lum for x in c]) if lum > 0 else (1.0, 1.0, 1.0)
 
 
 def from_appearance(model: str, a: Appearance) -> dict[str, Value]:
@@ -70,33 +113,56 @@ def from_appearance(model: str, a: Appearance) -> dict[str, Value]:
     metal = a.kind == "conductor"
     spec = a.specular if metal else (float(sum(a.specular)) / 3,) * 3
     out: dict[str, Value] = {}
-    if a.distribution is not None and model in ("roughconductor", "roughplastic"):
+    if a.distribution is not None and model in ("roughconductor", "roughplastic", "roughdielectric"):
         out["distribution"] = a.distribution
     if a.alpha is not None:
         if model == "phong":
             out["exponent"] = max(2.0 / a.alpha**2 - 2.0, 1.0)
         elif model in ("principled",):
             out["roughness"] = math.sqrt(a.alpha)
-        elif model != "diffuse":
+        elif model not in ("diffuse", "conductor", "plastic", "dielectric", "thindielectric"):
             out["alpha"] = a.alpha
-    if model == "roughconductor":
+    if model in ("roughconductor", "conductor"):
         eta, k = a.conductor_ior()
         out.update(eta=eta, k=k)
+        if model == "roughconductor" and a.anisotropy > 0.0 and a.alpha is not None:
+            au, av = alphas_from_anisotropy(a.alpha, a.anisotropy, a.rotation)
+            out.update(anisotropy="anisotropic", alpha_u=au, alpha_v=av)
     elif model == "ashikhmin_shirley":
         eta, k = a.conductor_ior()
         r, g = reflectivity_edge_tint(eta, k)
         out.update(reflectivity=as_rgb(r), edge_tint=as_rgb(g), eta=eta, k=k)
-    elif model in ("roughplastic", "ashikhmin_shirley_plastic"):
+    elif model in ("roughplastic", "plastic", "ashikhmin_shirley_plastic"):
         out.update(diffuse_reflectance=a.diffuse, int_ior=a.dielectric_ior() * EXT_IOR)
+    elif model in GLASSES:
+        out.update(int_ior=a.dielectric_ior() * EXT_IOR, specular_transmittance=a.transmittance)
     elif model == "diffuse":
         out["reflectance"] = a.specular if metal else a.diffuse
     elif model in ("ward", "phong"):
         out.update(specular_reflectance=spec, diffuse_reflectance=a.diffuse)
     elif model == "principled":
-        out.update(base_color=a.specular if metal else a.diffuse, metallic=1.0 if metal else 0.0,
-                   specular=min(float(sum(a.specular)) / 3 / 0.08, 1.0) if not metal else 0.5)
+        out.update(_principled_params(a, metal))
     else:
         return {}
+    return out
+
+
+def _principled_params(a: Appearance, metal: bool) -> dict[str, Value]:
+    out: dict[str, Value] = {
+        "base_color": a.specular if metal else (a.transmittance if a.transmission > 0 and max(a.diffuse) == 0
+                                                else a.diffuse),
+        "metallic": 1.0 if metal else 0.0,
+        "specular": min(float(sum(a.specular)) / 3 / 0.08, 1.0) if not metal else 0.5}
+    if a.anisotropy > 0.0:
+        out["anisotropic"] = a.anisotropy
+    if a.transmission > 0.0:
+        out["spec_trans"] = a.transmission
+    if a.coat is not None:
+        out.update(clearcoat=min(4.0 * a.coat.weight, 1.0),
+                   clearcoat_gloss=min(max((0.1 - a.coat.alpha) / 0.099, 0.0), 1.0))
+    if a.sheen is not None:
+        t = a.sheen.tint
+        out.update(sheen=a.sheen.weight, sheen_tint=1.0 - min(t) / max(t) if max(t) > 0 else 0.0)
     return out
 
 
@@ -104,6 +170,13 @@ def model_for(a: Appearance) -> tuple[str, dict[str, Value], str]:
     """The Mitsuba model an exporter would pick: a metal is a rough conductor, a diffuse-only
     material a diffuse BSDF, anything else a rough plastic; the source's distribution is held."""
     fix: dict[str, Value] = {"distribution": a.distribution} if a.distribution in ("beckmann", "ggx") else {}
+    if a.transmission >= 0.5 and a.kind == "dielectric" and max(a.diffuse) == 0.0:
+        return "roughdielectric", fix, "a glass (transmissive, no diffuse base)"
+    if a.coat is not None or a.sheen is not None or (a.anisotropy > 0.0 and a.kind != "conductor") \
+            or a.transmission > 0.0:
+        return "principled", {}, "coated, sheen or partly transmissive: Mitsuba's principled BSDF"
+    if a.kind == "conductor" and a.anisotropy > 0.0:
+        return "roughconductor", {**fix, "anisotropy": "anisotropic"}, "an anisotropic metal"
     if a.kind == "conductor":
         return "roughconductor", fix, "a metal (coloured specular, no diffuse)"
     if a.alpha is None or max(a.specular) == 0.0:

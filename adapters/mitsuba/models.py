@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from brdfremap.core.schemas import LobeSpec, ModelSpec, ParamSpec
 
+from .blend import blend_spec
+
 # Mitsuba 3's complex IOR database (names accepted by `material=` of conductors).
 CONDUCTOR_PRESETS = (
     "none", "a-C", "Ag", "Al", "AlAs", "AlAs_palik", "AlSb", "AlSb_palik", "Au", "Be", "Cr", "CsI", "Cu",
@@ -34,23 +36,50 @@ def _lobes(*specular: str) -> dict[str, LobeSpec]:
     }
 
 
+ANISOTROPY = ParamSpec(name="anisotropy", kind="choice", default="isotropic", choices=("isotropic", "anisotropic"),
+                       description="One roughness (alpha), or one along the tangent and one across (alpha_u, "
+                                   "alpha_v; the probe's tangent runs along the sphere's latitudes, its pole at the "
+                                   "image's top).")
+ISOTROPIC, ANISOTROPIC = {"anisotropy": ("isotropic",)}, {"anisotropy": ("anisotropic",)}
+
+
+def _alpha(name: str, desc: str, when: dict) -> ParamSpec:
+    return ALPHA.model_copy(update={"name": name, "description": desc, "active_when": when})
+
+
+CONDUCTOR_PRESET = ParamSpec(name="material", kind="choice", default="none", choices=CONDUCTOR_PRESETS,
+                             description="Named conductor from Mitsuba's IOR database; 'none' uses eta and k.")
+
 ROUGHCONDUCTOR = ModelSpec(
     name="roughconductor",
     derived=('reflectivity', 'edge_tint'),
-    description="Rough metal: microfacet conductor with Fresnel from a named IOR preset or eta/k.",
+    description="Rough metal: microfacet conductor with Fresnel from a named IOR preset or eta/k; isotropic or "
+                "anisotropic.",
     parameters=(
         DISTRIBUTION,
-        ParamSpec(name="material", kind="choice", default="none", choices=CONDUCTOR_PRESETS,
-                  description="Named conductor from Mitsuba's IOR database; 'none' uses eta and k."),
+        CONDUCTOR_PRESET,
         ETA,
         K,
-        ALPHA,
+        ANISOTROPY,
+        _alpha("alpha", ALPHA.description, ISOTROPIC),
+        _alpha("alpha_u", "Microfacet α along the tangent (the sphere's latitudes).", ANISOTROPIC),
+        _alpha("alpha_v", "Microfacet α across the tangent (the sphere's meridians).", ANISOTROPIC),
         SPEC_REFL,
     ),
     lobes={
         "diffuse": LobeSpec(empty=True),
-        "specular": LobeSpec(params=("alpha", "eta", "k", "specular_reflectance")),
+        "specular": LobeSpec(params=("alpha", "alpha_u", "alpha_v", "eta", "k", "specular_reflectance")),
     },
+)
+
+CONDUCTOR = ModelSpec(
+    name="conductor",
+    derived=('reflectivity', 'edge_tint'),
+    description="Smooth metal (a mirror): under the probe's point light it shows nothing but a point; fit it "
+                "under an environment (--fit-scene).",
+    smooth=True,
+    parameters=(CONDUCTOR_PRESET, ETA, K, SPEC_REFL),
+    lobes={"diffuse": LobeSpec(empty=True), "specular": LobeSpec(params=("eta", "k", "specular_reflectance"))},
 )
 
 ROUGHPLASTIC = ModelSpec(
@@ -76,8 +105,55 @@ DIFFUSE = ModelSpec(
 )
 
 
+PLASTIC = ModelSpec(
+    name="plastic",
+    derived=('specular_f0',),
+    description="Diffuse base under a smooth dielectric coating: under the probe's point light only the diffuse "
+                "part and the coating's Fresnel loss show; the mirror reflection needs an environment.",
+    smooth=True,
+    parameters=(BASE_COLOUR, INT_IOR, SPEC_REFL),
+    lobes=_lobes("int_ior", "specular_reflectance"),
+)
+
+SPEC_TRANS = ParamSpec(name="specular_transmittance", kind="rgb", default=(1.0, 1.0, 1.0), fit=False,
+                       description="Multiplier on the transmitted light (physically 1). The probe cannot see it: "
+                                   "direct light through the sphere is shadowed by the sphere itself and the "
+                                   "background is black.")
+GLASS_IOR = INT_IOR.model_copy(update={"default": 1.5046, "description": "Interior index of refraction (exterior: "
+                                                                         "air)."})
+GLASS_NOTE = ("Glass: the probe sees only the reflection (its Fresnel and roughness); the transmitted light "
+              "meets the black background and the sphere's own shadow, so transmittance is not identified.")
+
+DIELECTRIC = ModelSpec(
+    name="dielectric",
+    description="Smooth glass. " + GLASS_NOTE + " Under a point light a smooth reflection is a point: fit "
+                "under an environment.",
+    smooth=True,
+    parameters=(GLASS_IOR, SPEC_REFL, SPEC_TRANS),
+    lobes={"diffuse": LobeSpec(empty=True), "specular": LobeSpec(params=("int_ior", "specular_reflectance"))},
+)
+
+ROUGHDIELECTRIC = ModelSpec(
+    name="roughdielectric",
+    description="Rough glass. " + GLASS_NOTE,
+    parameters=(DISTRIBUTION, ALPHA, GLASS_IOR, SPEC_REFL, SPEC_TRANS),
+    lobes={"diffuse": LobeSpec(empty=True), "specular": LobeSpec(params=("alpha", "int_ior", "specular_reflectance"))},
+)
+
+THINDIELECTRIC = ModelSpec(
+    name="thindielectric",
+    description="A thin glass sheet (a window pane) on the probe sphere. " + GLASS_NOTE,
+    smooth=True,
+    parameters=(GLASS_IOR, SPEC_REFL, SPEC_TRANS),
+    lobes={"diffuse": LobeSpec(empty=True), "specular": LobeSpec(params=("int_ior", "specular_reflectance"))},
+)
+
 def _unit(name, default, fit=True, desc=""):
     return ParamSpec(name=name, kind="scalar", default=default, fit=fit, description=desc)
+
+
+def _carried(name, default, desc):
+    return ParamSpec(name=name, kind="scalar", default=default, fit=False, fit_when_carried=True, description=desc)
 
 
 PRINCIPLED = ModelSpec(
@@ -87,13 +163,18 @@ PRINCIPLED = ModelSpec(
         ParamSpec(name="base_color", kind="rgb", default=(0.5, 0.5, 0.5), description="Base colour."),
         _unit("metallic", 0.0, desc="Metalness."),
         _unit("roughness", 0.5, desc="Roughness (α = roughness²)."),
-        _unit("specular", 0.5, desc="Dielectric specular amount (0.5 ≈ IOR 1.5)."),
+        _unit("specular", 0.5, desc="Dielectric specular amount: F0 = 0.08 × specular (0.5 ≈ IOR 1.5). Mitsuba's "
+              "`eta` is the same thing (one or the other): a file's eta is read as this."),
         _unit("spec_tint", 0.0, fit=False, desc="Tint of the dielectric specular towards the base colour."),
-        _unit("anisotropic", 0.0, fit=False, desc="Anisotropy."),
-        _unit("sheen", 0.0, fit=False, desc="Sheen amount."),
-        _unit("sheen_tint", 0.0, fit=False, desc="Sheen tint."),
-        _unit("clearcoat", 0.0, fit=False, desc="Clear-coat amount."),
-        _unit("clearcoat_gloss", 0.0, fit=False, desc="Clear-coat glossiness."),
+        _carried("anisotropic", 0.0, "Anisotropy: α along the tangent r²/√(1 − 0.9 a), across r²·√(1 − 0.9 a) (the "
+                 "probe's tangent runs along the sphere's latitudes; Mitsuba has no rotation)."),
+        _carried("sheen", 0.0, "Sheen amount."),
+        _unit("sheen_tint", 0.0, fit=False, desc="Sheen tint towards the base colour."),
+        _carried("clearcoat", 0.0, "Clear-coat amount (a GTR1 lobe at a fixed IOR 1.5, scaled by 1/4)."),
+        _carried("clearcoat_gloss", 0.0, "Clear-coat glossiness (α from 0.1 at 0 to 0.001 at 1)."),
+        _unit("spec_trans", 0.0, fit=False, desc="Specular transmission: the probe sees it as reflection lost "
+              "to the black background."),
+        _unit("flatness", 0.0, fit=False, desc="Flatness (Mitsuba traverses it; it acts in principledthin)."),
     ),
 )
 
@@ -184,5 +265,7 @@ AS_PLASTIC = ModelSpec(
     lobes=_lobes("alpha", "int_ior", "specular_reflectance"),
 )
 
-MODELS = {m.name: m for m in (ROUGHCONDUCTOR, ROUGHPLASTIC, DIFFUSE, PRINCIPLED, WARD, PHONG, AS_CONDUCTOR,
-                              AS_PLASTIC)}
+MODELS = {m.name: m for m in (ROUGHCONDUCTOR, CONDUCTOR, ROUGHPLASTIC, PLASTIC, DIFFUSE, DIELECTRIC,
+                              ROUGHDIELECTRIC, THINDIELECTRIC, PRINCIPLED, WARD, PHONG, AS_CONDUCTOR, AS_PLASTIC)}
+
+MODELS["blendbsdf"] = blend_spec(MODELS)

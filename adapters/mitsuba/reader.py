@@ -18,6 +18,7 @@ from brdfremap.core.errors import ConfigError
 from brdfremap.core.library.formats import Entry, clip_into
 from brdfremap.core.schemas import Material
 
+from .blend import COMPONENTS, SLOTS
 from .models import MODELS
 
 NAMED_IOR = {"vacuum": 1.0, "helium": 1.00004, "hydrogen": 1.00013, "air": 1.000277, "carbon dioxide": 1.00045,
@@ -27,11 +28,10 @@ NAMED_IOR = {"vacuum": 1.0, "helium": 1.00004, "hydrogen": 1.00013, "air": 1.000
              "amber": 1.55, "pet": 1.5750, "diamond": 2.419}
 WRAPPERS = {"twosided": "two-sided (unwrapped)", "bumpmap": "its bump map is ignored",
             "normalmap": "its normal map is ignored", "mask": "its opacity mask is ignored"}
-SMOOTH = {"conductor": "roughconductor", "plastic": "roughplastic"}
-"""Smooth BSDFs read as the rough model at its lowest roughness."""
-NOT_YET = {"dielectric": "glass", "roughdielectric": "rough glass", "thindielectric": "thin glass",
-           "blendbsdf": "a blend of two BSDFs", "measured": "a measured BRDF", "hair": "hair",
+NOT_YET = {"measured": "a measured BRDF", "hair": "hair",
            "pplastic": "polarized plastic", "polarizer": "a polarizer", "retarder": "a retarder", "null": "a null BSDF"}
+CONVERTED = {"principled": ("eta",)}
+"""Properties read into another parameter of the model (below)."""
 IGNORED = {"sample_visible", "nonlinear"}
 _SUBST = re.compile(r"\$([A-Za-z_][A-Za-z0-9_]*)")
 
@@ -127,19 +127,16 @@ def _substitute(text: str, defaults: dict[str, str], path: Path) -> str:
 def _entry(doc: _Document, elem: ET.Element, name: str, file: str) -> Entry:
     notes: list[str] = []
     elem = _unwrap(doc, elem, notes)
-    kind = elem.get("type", "")
-    model = SMOOTH.get(kind, kind)
+    kind = model = elem.get("type", "")
     if model not in MODELS:
         why = f"{NOT_YET[kind]} ({kind}) is not supported yet" if kind in NOT_YET else \
             f"Mitsuba BSDF type {kind!r} has no model here (models: {', '.join(sorted(MODELS))})"
         return Entry(name=name, file=file, problem=why, notes=notes)
     try:
-        params, textured = _params(doc, elem, model, notes)
+        params, textured = _blend_params(doc, elem, notes) if model == "blendbsdf" else \
+            _params(doc, elem, model, notes)
     except ConfigError as exc:
         return Entry(name=name, file=file, problem=str(exc), notes=notes)
-    if kind in SMOOTH:
-        params["alpha"] = MODELS[model].param("alpha").lower
-        notes.append(f"a smooth {kind}: read as {model} at its lowest roughness (alpha {params['alpha']:g})")
     return Entry(name=name, file=file, material=Material(adapter="mitsuba", model=model, params=params, name=name),
                  notes=notes, textured=textured)
 
@@ -175,21 +172,53 @@ def _params(doc: _Document, elem: ET.Element, model: str, notes: list[str]) -> t
             aniso[name] = value
         elif name in ("int_ior", "ext_ior") and isinstance(value, str):
             params[name] = _named_ior(value)
-        elif name in spec.names:
+        elif name in spec.names or name in CONVERTED.get(model, ()):
             params[name] = value
         elif name not in IGNORED:
             notes.append(f"{name} = {prop.get('value')} has no counterpart in the {model!r} model: ignored")
-    if aniso:
+    if aniso and "anisotropy" in spec.names:
+        params.update(anisotropy="anisotropic", alpha_u=float(aniso.get("alpha_u", 0.1)),
+                      alpha_v=float(aniso.get("alpha_v", 0.1)))
+    elif aniso:
         au, av = float(aniso.get("alpha_u", 0.1)), float(aniso.get("alpha_v", 0.1))
         params["alpha"] = math.sqrt(au * av)
-        notes.append(f"anisotropic (alpha_u {au:g}, alpha_v {av:g}): read as isotropic alpha {params['alpha']:.4g}")
+        notes.append(f"anisotropic (alpha_u {au:g}, alpha_v {av:g}): {model} is isotropic here, read as alpha "
+                     f"{params['alpha']:.4g}")
+    if model == "principled" and "eta" in params:  # Mitsuba's principled takes eta or specular: one thing
+        eta = float(params.pop("eta"))
+        params["specular"] = min(((eta - 1.0) / (eta + 1.0)) ** 2 / 0.08, 1.0)
+        notes.append(f"eta {eta:g} read as specular {params['specular']:.4g} (F0 = 0.08 x specular)")
     ext = params.pop("ext_ior", None)
     if ext is not None and abs(float(ext) - NAMED_IOR["air"]) > 1e-3:
         notes.append(f"ext_ior {float(ext):g} is read as air (the model's exterior)")
-    if model in ("roughconductor",) and params.get("material", "none") == "none":
+    if model in ("roughconductor", "conductor") and params.get("material", "none") == "none":
         params.setdefault("eta", (0.0, 0.0, 0.0))  # Mitsuba's default: a perfect mirror (eta 0, k 1)
         params.setdefault("k", (1.0, 1.0, 1.0))
     notes += clip_into(spec, params)
+    return params, textured
+
+
+def _blend_params(doc: _Document, elem: ET.Element, notes: list[str]) -> tuple[dict, list[str]]:
+    """A blendbsdf's weight and its two BSDFs, each under its slot's name (`bsdf_1.alpha`)."""
+    inner = [_unwrap(doc, c, notes) for c in elem if c.tag in ("bsdf", "ref")]
+    if len(inner) != 2:
+        raise ConfigError(f"a blendbsdf needs two BSDFs inside, this one has {len(inner)}")
+    params: dict = {}
+    textured: list[str] = []
+    for slot, child in zip(SLOTS, inner):
+        kind = child.get("type", "")
+        if kind not in COMPONENTS:
+            raise ConfigError(f"a blend of {kind!r} is not supported (a blend's BSDFs: {', '.join(COMPONENTS)})")
+        sub, tex = _params(doc, child, kind, notes)
+        params[slot] = kind
+        params.update({f"{slot}.{k}": v for k, v in sub.items()})
+        textured += [f"{slot}.{t}" for t in tex]
+    for prop in elem:
+        if prop.get("name") == "weight" and prop.tag in ("texture", "ref"):
+            textured.append(_texture(doc, prop, "weight"))
+        elif prop.get("name") == "weight":
+            params["weight"] = _value(prop)
+    notes += clip_into(MODELS["blendbsdf"], params)
     return params, textured
 
 

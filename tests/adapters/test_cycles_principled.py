@@ -21,6 +21,7 @@ CHANGES = [
     ({"metallic": 0.0}, {"transmission_weight": 1.0}),
     ({}, {"thin_film_thickness": 400.0}), ({"thin_film_thickness": 400.0}, {"thin_film_ior": 2.0}),
     ({}, {"alpha": 0.5}),
+    ({}, {"anisotropic": 0.9}), ({"anisotropic": 0.9}, {"anisotropic_rotation": 0.125}),
 ]
 
 

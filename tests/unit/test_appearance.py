@@ -14,7 +14,7 @@ from brdfremap.core.appearance import (Appearance, conductor_f0, dielectric_f0, 
                                        reflectivity_edge_tint)
 from brdfremap.core.scene import ProbeScene
 from brdfremap.core.schemas import Material
-from brdfremap.core.execute import AdapterPool, execute, informed_start
+from brdfremap.core.execute import AdapterPool, execute, fitted, informed_start
 from brdfremap.core.job import Job, Target, resolve
 from brdfremap.core.settings import Settings
 from brdfremap_example.adapter import ToyAdapter
@@ -100,7 +100,10 @@ def test_the_session_starts_from_the_conversion_of_free_parameters_only_within_b
         start = informed_start(job, ads)
         assert start == {"diffuse": (0.6, 0.3, 0.1), "alpha": 0.15}  # specular is fixed: not touched
         ads["toy"].from_appearance = lambda m, a, b: {"diffuse": (1.7, -0.2, 0.5), "alpha": 9.0, "unused": 0.3}
-        assert informed_start(job, ads) == {"diffuse": (1.0, 0.0, 0.5), "alpha": 1.0}  # clipped; unused not free
+        # Clipped; the held one is taken as the start gives it, and stays held.
+        start = informed_start(job, ads)
+        assert start == {"diffuse": (1.0, 0.0, 0.5), "alpha": 1.0, "unused": 0.3}
+        assert "unused" not in fitted(job, start)
         ads["toy"].from_appearance = lambda m, a, b: {"diffuse": 0.5, "alpha": float("nan")}
         assert informed_start(job, ads) == {}  # a hint of the wrong shape or not finite is left out
 
