@@ -21,7 +21,10 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples" / "every_parameter"
 ROUND_TRIPS = ("coat_copper", "car_paint", "brushed_al", "sheen_fabric", "glass")
-ONE_WAY = {"al_aniso": ("cycles", "principled")}
+ONE_WAY = {"al_aniso": ("cycles", "principled"), "brushed_al": ("mitsuba", "roughconductor")}
+"""Mitsuba's anisotropic roughconductor to Cycles; and the brushed aluminium, whose quarter-turn
+rotation Mitsuba's principled cannot express (it has no rotation), to the anisotropic
+roughconductor, which can (alpha_u and alpha_v swapped)."""
 SHOWN = ("metallic", "roughness", "anisotropic", "anisotropic_rotation", "coat_weight", "coat_roughness", "clearcoat",
          "clearcoat_gloss", "sheen_weight", "sheen", "transmission_weight", "spec_trans", "specular",
          "specular_ior_level", "alpha_u", "alpha_v")
@@ -72,7 +75,8 @@ def main() -> int:
         if args.only and name != args.only:
             continue
         r = remap(EXAMPLES / f"{name}.yaml", adapter, model, args.out / name / f"to_{adapter}", args.validate)
-        print(row(name, f"Mitsuba → {adapter} {model}", r), flush=True)
+        src = yaml.safe_load((EXAMPLES / f"{name}.yaml").read_text())["adapter"]
+        print(row(name, f"{src} → {adapter} {model}", r), flush=True)
     return 0
 
 

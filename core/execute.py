@@ -167,8 +167,10 @@ def informed_start(resolved: Resolved, adapters: AdapterPool) -> dict[str, Value
         if (p.kind == "choice" and p.name not in resolved.fixed and conv.get(p.name) in p.choices
                 and _named(adapters[job.target.adapter], job.target.model, look, resolved.base, p, conv[p.name])):
             out[p.name] = conv[p.name]
-    # Held ones too: the source's coat tint is rendered, not fitted.
-    for name in (p.name for p in spec.parameters if p.kind != "choice" and p.name not in resolved.fixed):
+    # Held ones too (the source's coat tint is rendered, not fitted), where the choices make them count.
+    chosen = {**resolved.base, **out}
+    for name in (p.name for p in spec.parameters
+                 if p.kind != "choice" and p.name not in resolved.fixed and spec.is_active(p.name, chosen)):
         try:
             v = spec.param(name).clip(conv[name])
         except (KeyError, TypeError, ValueError):

@@ -60,9 +60,9 @@ def choose(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, enviro
         return FitScene(scene)
     noise = source_noise(render, scene)
     if smooth and policy == "auto" and environment_ok and scene.environment is None and not scene.views:
-        return _environment(render, scene, noise, limit, "a perfectly smooth material (it shows a point light as "
-                                                         "a point at most)") or FitScene(scene, noise=noise,
-                                                                                          scene_noise=noise)
+        # Taken however noisy: under the point lights there is nothing to fit (the verdict says how noisy).
+        return _environment(render, scene, noise, math.inf, "a perfectly smooth material (it shows a point light "
+                                                            "as a point at most)")
     if noise <= GOAL or scene.views:
         return FitScene(scene, noise=noise, scene_noise=noise)
     spp = _samples_for(noise, scene.spp)
@@ -80,7 +80,7 @@ def choose(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, enviro
     return FitScene(scene, noise=noise, scene_noise=noise)
 
 
-def _environment(render, scene: ProbeScene, noise: float, limit: float, why: str) -> FitScene | None:
+def _environment(render, scene: ProbeScene, noise: float, limit: float, why: str) -> FitScene | None: 
     """The scene under the studio environment, with the samples that bring the source's noise to
     GOAL (up to MAX_SPP_FACTOR times more), or None when it cannot resolve the source either."""
     env = scene.model_copy(update={"lights": [EnvironmentLight(type="environment", map="studio")],

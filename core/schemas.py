@@ -51,6 +51,10 @@ class ParamSpec(_Strict):
                                           "values (Principled's Specular IOR Level once Metallic is 1): a fit "
                                           "that has settled them there need not render this parameter's "
                                           "Jacobian column.")
+    held_when: dict[str, float] = Field(
+        default_factory=dict, description="Not fitted while these numeric parameters take these values (a glass's "
+                                          "colour and metalness, which the probe's black background hides): held at "
+                                          "the start's value.")
     description: str = Field("", description="What it does.")
 
     @model_validator(mode="after")
@@ -208,6 +212,7 @@ class ModelSpec(_Strict):
             p.name
             for p in self.parameters
             if p.kind != "choice" and p.fit and p.name not in fixed and self.is_active(p.name, params)
+            and not (p.held_when and all(params.get(k) == v for k, v in p.held_when.items()))
         ]
 
     def with_lobe(self, params: dict[str, Value], lobe: str | None) -> dict[str, Value]:

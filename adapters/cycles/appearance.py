@@ -43,8 +43,10 @@ def _principled(p: dict[str, Value], alpha: float, dist) -> Appearance:
     if m >= 0.5:
         return Appearance(kind="conductor", alpha=alpha, distribution=dist, specular=base, **extra)  # type: ignore
     f0 = min(dielectric_f0(float(p["ior"])) * 2.0 * float(p["specular_ior_level"]), 1.0)  # type: ignore
+    opaque = (1.0 - m) * (1.0 - extra["transmission"])  # what is neither metal nor transmitted is diffuse
+    ior = float(p["ior"]) if extra["transmission"] > 0 else ior_from_f0(f0)  # type: ignore[arg-type]
     return Appearance(kind="dielectric", alpha=alpha, distribution=dist, specular=(f0,) * 3,  # type: ignore
-                      diffuse=tuple(c * (1.0 - m) for c in base), ior=ior_from_f0(f0), **extra)  # type: ignore
+                      diffuse=tuple(c * opaque for c in base), ior=ior, **extra)  # type: ignore
 
 
 def _layers(p: dict[str, Value]) -> dict:
@@ -61,6 +63,12 @@ def _layers(p: dict[str, Value]) -> dict:
         out["sheen"] = Sheen(weight=float(p["sheen_weight"]), tint=as_rgb(p["sheen_tint"]),  # type: ignore
                              roughness=float(p["sheen_roughness"]))  # type: ignore[arg-type]
     return out
+
+
+def _opaque_base(a: Appearance) -> tuple[float, float, float]:
+    """The base colour whose untransmitted part is the reading's diffuse albedo."""
+    keep = 1.0 - a.transmission
+    return tuple(c / keep for c in a.diffuse) if 0.0 < keep < 1.0 else a.diffuse  # type: ignore[return-value]
 
 
 def _layer_params(a: Appearance) -> dict[str, Value]:
@@ -96,7 +104,7 @@ def from_appearance(model: str, a: Appearance, base: dict[str, Value]) -> dict[s
     if a.distribution is not None and a.distribution in _CHOICES.get(model, ()):
         out["distribution"] = a.distribution  # the source's single-scattering lobe, not multi_ggx's extra energy
     if model == "principled":
-        out.update(base_color=a.specular if metal else a.diffuse, metallic=1.0 if metal else 0.0)
+        out.update(base_color=a.specular if metal else _opaque_base(a), metallic=1.0 if metal else 0.0)
         out.update(_layer_params(a))
         if not metal and a.transmission > 0.0:
             out["specular_ior_level"] = 0.5  # a glass's F0 is its IOR's

@@ -13,7 +13,7 @@ from brdfremap.core.schemas import LobeSpec, ModelSpec, ParamSpec
 # Metallic too: it fades the diffuse lobe out. The engine refits shared parameters on the
 # full image in the second stage.
 PASS_LOBES_PRINCIPLED = {
-    "diffuse": LobeSpec(params=("base_color", "metallic")),
+    "diffuse": LobeSpec(params=("base_color", "metallic", "sheen_weight", "sheen_roughness")),  # Sheen: a diffuse closure
     "specular": LobeSpec(params=("base_color", "metallic", "roughness", "ior", "specular_ior_level", "specular_tint",
                                  "anisotropic", "anisotropic_rotation", "coat_weight", "coat_roughness")),
 }
@@ -28,6 +28,7 @@ def _unit(name, default, fit=True, desc="", upper=1.0, **kw):
 # renders in Blender 5.0; tests/test_cycles.py keeps checking it).
 METAL = {"metallic": 1.0}
 ISOTROPIC = {"anisotropic": 0.0}
+GLASS = {"transmission_weight": 1.0}
 NO_COAT, NO_SHEEN, NO_SSS, NO_FILM = ({"coat_weight": 0.0}, {"sheen_weight": 0.0}, {"subsurface_weight": 0.0},
                                       {"thin_film_thickness": 0.0})
 
@@ -38,8 +39,9 @@ PRINCIPLED = ModelSpec(
     parameters=(
         ParamSpec(name="distribution", kind="choice", default="multi_ggx", choices=("multi_ggx", "ggx"), explore=True,
                   description="Microfacet distribution of the Principled BSDF."),
-        ParamSpec(name="base_color", kind="rgb", default=(0.8, 0.8, 0.8), description="Base Color."),
-        _unit("metallic", 0.0, desc="Metallic."),
+        ParamSpec(name="base_color", kind="rgb", default=(0.8, 0.8, 0.8), held_when=GLASS,
+                  description="Base Color (a glass's colour: held, the probe cannot see it)."),
+        _unit("metallic", 0.0, desc="Metallic.", held_when=GLASS),
         _unit("roughness", 0.5, desc="Roughness (α = roughness²)."),
         ParamSpec(name="ior", kind="scalar", lower=1.0, upper=3.0, default=1.5, fit=False, inert_when=METAL,
                   description="IOR of the dielectric specular (use Specular IOR Level to fit F0)."),

@@ -81,7 +81,8 @@ class BlenderState:
         for i, light in enumerate(x for x in sc_json["lights"] if x["type"] == "point"):
             self._light(scene, light, "probe-light" if i == 0 else f"probe-light{i}")
         self._sphere(scene, sc_json["sphere"])
-        self._mesh_sphere(scene, sc_json["sphere"])
+        self.mesh_probe = None  # made when an anisotropic material first needs it
+        self.sphere = sc_json["sphere"]
         # A few lights: nothing for a light tree to choose between (bench/cycles_render.py).
         cy.use_light_tree = False
         self.passes = None  # the lobe passes are switched on per request (see render)
@@ -187,14 +188,12 @@ class BlenderState:
         same orientation. Isotropic, it renders as the point does to 0.08 % RMSE at 128² (below
         the 0.4 % noise of 256 spp), but not bit for bit from one process to the next (1e-7: the
         threaded BVH build), so the exact point stays the probe of everything else."""
-        import bmesh
+        from brdfremap.adapters.cycles.sphere_mesh import uv_sphere
 
         bpy = self.bpy
         mesh = bpy.data.meshes.new("probe-mesh")
-        bm = bmesh.new()
-        bmesh.ops.create_uvsphere(bm, u_segments=SPHERE_SEGMENTS, v_segments=SPHERE_SEGMENTS // 2, radius=1.0)
-        bm.to_mesh(mesh)
-        bm.free()
+        verts, faces = uv_sphere(SPHERE_SEGMENTS, SPHERE_SEGMENTS // 2)
+        mesh.from_pydata(verts.tolist(), [], faces)
         mesh.shade_smooth()
         mesh.materials.append(None)
         obj = bpy.data.objects.new("probe-mesh", mesh)
@@ -207,12 +206,14 @@ class BlenderState:
 
     def _use_probe(self, mat, anisotropic: bool) -> None:
         """The material on the probe this render needs, the other probe hidden."""
+        if anisotropic and self.mesh_probe is None:
+            self._mesh_sphere(self.bpy.context.scene, self.sphere)
         if anisotropic:
             if self.mesh_probe.data.materials[0] != mat:
                 self.mesh_probe.data.materials[0] = mat
         elif self.set_material.inputs["Material"].default_value != mat:
             self.set_material.inputs["Material"].default_value = mat
-        if self.mesh_probe.hide_render != (not anisotropic):
+        if self.mesh_probe is not None and self.mesh_probe.hide_render != (not anisotropic):
             self.mesh_probe.hide_render = not anisotropic
             self.probe.hide_render = anisotropic
 

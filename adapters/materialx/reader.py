@@ -11,7 +11,7 @@ from brdfremap.core.errors import ConfigError
 from brdfremap.core.library.formats import Entry, clip_into
 from brdfremap.core.schemas import Material
 
-from .correspondence import HALF, QUIET, TO_PRINCIPLED
+from .correspondence import HALF, SCALE, QUIET, TO_PRINCIPLED
 
 NOTE = ("read as Blender Cycles' Principled BSDF by the {shader} correspondence (Blender's Principled BSDF "
         "follows OpenPBR): MaterialX has no renderer of its own here")
@@ -92,7 +92,7 @@ def _principled(shader, category: str) -> tuple[dict, list[str], list[str]]:
         v = vals[0]
         if len(vals) == 2:  # a colour times its weight
             v = tuple(c * float(vals[1]) for c in v)
-        params[pname] = v / 2.0 if pname in HALF else v
+        params[pname] = v / 2.0 if pname in HALF else v * SCALE[pname] if pname in SCALE else v
     notes = clip_into(PRINCIPLED, params) + _unused(shader, nodedef, used)
     return params, textured, notes
 

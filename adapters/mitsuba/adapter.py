@@ -208,14 +208,15 @@ def energy_notes(model: str, p: dict[str, Value]) -> list[str]:
 
 ONE_SIDED = {"roughconductor", "conductor", "roughplastic", "plastic", "diffuse", "principled", "ward", "phong",
              "ashikhmin_shirley", "ashikhmin_shirley_plastic", "blendbsdf"}
-"""Models Mitsuba shades on the front side only: written inside a `twosided` (Blender's and
+"""Models Mitsuba shades on the front side only: written inside a `twosided` (a principled one
+only without `spec_trans`: Mitsuba nests no transmissive BSDF there) (Blender's and
 MaterialX's surfaces are two-sided; the probe sees front faces only, so the fit is the same)."""
 
 
 def bsdf_xml(model: str, p: dict[str, Value], two_sided: bool = True) -> str:
     """The material as a Mitsuba 3 XML ``<bsdf>`` element; an opaque one inside a ``twosided``."""
     d = bsdf_dict(model, p)
-    if two_sided and model in ONE_SIDED:
+    if two_sided and model in ONE_SIDED and not float(p.get("spec_trans", 0.0)) > 0.0:  # type: ignore[arg-type]
         d = {"type": "twosided", "bsdf": d}
     return "\n".join(_xml_element(d, None, "")) + "\n"
 

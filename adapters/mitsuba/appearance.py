@@ -98,8 +98,9 @@ def _principled(p: dict[str, Value]) -> Appearance:
     if m >= 0.5:
         return Appearance(kind="conductor", alpha=alpha, distribution="ggx", specular=base, **extra)  # type: ignore
     f0 = 0.08 * float(p["specular"])  # type: ignore[arg-type]
+    opaque = (1.0 - m) * (1.0 - extra["transmission"])
     return Appearance(kind="dielectric", alpha=alpha, distribution="ggx", specular=(f0,) * 3,
-                      diffuse=tuple(c * (1.0 - m) for c in base), ior=ior_from_f0(f0), **extra)  # type: ignore
+                      diffuse=tuple(c * opaque for c in base), ior=ior_from_f0(f0), **extra)  # type: ignore
 
 
 def _hue(c) -> tuple[float, float, float]:
@@ -147,10 +148,25 @@ def from_appearance(model: str, a: Appearance) -> dict[str, Value]:
     return out
 
 
+def _opaque_base(a: Appearance) -> tuple[float, float, float]:
+    """The base colour whose untransmitted part is the reading's diffuse albedo."""
+    keep = 1.0 - a.transmission
+    return tuple(c / keep for c in a.diffuse) if 0.0 < keep < 1.0 else a.diffuse  # type: ignore[return-value]
+
+
+def _sheen_tint(tint, base) -> float:
+    """Disney's sheen_tint t whose colour 1 - t + t·hue(base) is nearest a sheen colour (least squares)."""
+    hue = _hue(base)
+    den = sum((h - 1.0) ** 2 for h in hue)
+    if den == 0.0:
+        return 0.0
+    return min(max(sum((c - 1.0) * (h - 1.0) for c, h in zip(tint, hue)) / den, 0.0), 1.0)
+
+
 def _principled_params(a: Appearance, metal: bool) -> dict[str, Value]:
     out: dict[str, Value] = {
         "base_color": a.specular if metal else (a.transmittance if a.transmission > 0 and max(a.diffuse) == 0
-                                                else a.diffuse),
+                                                else _opaque_base(a)),
         "metallic": 1.0 if metal else 0.0,
         "specular": min(float(sum(a.specular)) / 3 / 0.08, 1.0) if not metal else 0.5}
     if a.anisotropy > 0.0:
@@ -161,8 +177,7 @@ def _principled_params(a: Appearance, metal: bool) -> dict[str, Value]:
         out.update(clearcoat=min(4.0 * a.coat.weight, 1.0),
                    clearcoat_gloss=min(max((0.1 - a.coat.alpha) / 0.099, 0.0), 1.0))
     if a.sheen is not None:
-        t = a.sheen.tint
-        out.update(sheen=a.sheen.weight, sheen_tint=1.0 - min(t) / max(t) if max(t) > 0 else 0.0)
+        out.update(sheen=a.sheen.weight, sheen_tint=_sheen_tint(a.sheen.tint, out["base_color"]))
     return out
 
 

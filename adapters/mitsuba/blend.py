@@ -61,7 +61,7 @@ def component(slot: str, p: dict[str, Value]) -> tuple[str, dict[str, Value]]:
 def blend_appearance(p: dict[str, Value], read) -> Appearance | None:
     """An exporter's reading of a blend: each slot's reading, mixed by the weight (specular and
     diffuse reflectances in proportion, the α of the slot with the stronger specular lobe, the
-    kind of the heavier slot). ``read(model, params)`` is the adapter's reading of one model."""
+    kind of the heavier slot unless the blend has a diffuse part: then a dielectric). ``read(model, params)`` is the adapter's reading of one model."""
     w = float(p["weight"])  # type: ignore[arg-type]
     looks = [read(*component(s, p)) for s in SLOTS]
     if any(a is None for a in looks):
@@ -73,6 +73,8 @@ def blend_appearance(p: dict[str, Value], read) -> Appearance | None:
 
     glossy = max((a, 1 - w), (b, w), key=lambda t: max(t[0].specular) * t[1] if t[0].alpha else -1.0)[0]
     heavier = a if w < 0.5 else b
-    return Appearance(kind=heavier.kind, alpha=glossy.alpha, distribution=glossy.distribution,
-                      specular=mix(a.specular, b.specular), diffuse=mix(a.diffuse, b.diffuse),  # type: ignore
-                      ior=glossy.ior if heavier.kind == "dielectric" else None)
+    diffuse = mix(a.diffuse, b.diffuse)
+    return Appearance(kind="dielectric" if max(diffuse) > 0 else heavier.kind, alpha=glossy.alpha, distribution=glossy.distribution,
+                      specular=mix(a.specular, b.specular), diffuse=diffuse,  # type: ignore
+                      ior=glossy.ior if heavier.kind == "dielectric" else None, anisotropy=glossy.anisotropy,
+                      rotation=glossy.rotation)

@@ -148,8 +148,8 @@ THINDIELECTRIC = ModelSpec(
     lobes={"diffuse": LobeSpec(empty=True), "specular": LobeSpec(params=("int_ior", "specular_reflectance"))},
 )
 
-def _unit(name, default, fit=True, desc=""):
-    return ParamSpec(name=name, kind="scalar", default=default, fit=fit, description=desc)
+def _unit(name, default, fit=True, desc="", **kw):
+    return ParamSpec(name=name, kind="scalar", default=default, fit=fit, description=desc, **kw)
 
 
 def _carried(name, default, desc):
@@ -160,8 +160,9 @@ PRINCIPLED = ModelSpec(
     name="principled",
     description="Disney principled BSDF (Mitsuba 3's `principled`); lobes are not separable by parameters.",
     parameters=(
-        ParamSpec(name="base_color", kind="rgb", default=(0.5, 0.5, 0.5), description="Base colour."),
-        _unit("metallic", 0.0, desc="Metalness."),
+        ParamSpec(name="base_color", kind="rgb", default=(0.5, 0.5, 0.5), held_when={"spec_trans": 1.0},
+                  description="Base colour (a glass's colour: held, the probe cannot see it)."),
+        _unit("metallic", 0.0, desc="Metalness.", held_when={"spec_trans": 1.0}),
         _unit("roughness", 0.5, desc="Roughness (α = roughness²)."),
         _unit("specular", 0.5, desc="Dielectric specular amount: F0 = 0.08 × specular (0.5 ≈ IOR 1.5). Mitsuba's "
               "`eta` is the same thing (one or the other): a file's eta is read as this."),

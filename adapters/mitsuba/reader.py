@@ -200,7 +200,7 @@ def _params(doc: _Document, elem: ET.Element, model: str, notes: list[str]) -> t
 
 def _blend_params(doc: _Document, elem: ET.Element, notes: list[str]) -> tuple[dict, list[str]]:
     """A blendbsdf's weight and its two BSDFs, each under its slot's name (`bsdf_1.alpha`)."""
-    inner = [_unwrap(doc, c, notes) for c in elem if c.tag in ("bsdf", "ref")]
+    inner = [_unwrap(doc, c, notes) for c in elem if c.tag in ("bsdf", "ref") and c.get("name") != "weight"]
     if len(inner) != 2:
         raise ConfigError(f"a blendbsdf needs two BSDFs inside, this one has {len(inner)}")
     params: dict = {}

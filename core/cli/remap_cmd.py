@@ -28,6 +28,12 @@ examples:
 """
 
 
+def _carried_note(spec) -> str:
+    """The header's word on parameters fitted only when the source has them (a coat, a sheen)."""
+    return " + coat, sheen, anisotropy if the source has them" if any(
+        p.fit_when_carried for p in spec.parameters) else ""
+
+
 def parser() -> argparse.ArgumentParser:
     p = options.Parser(
         prog="remap",
@@ -76,8 +82,8 @@ def run(args: argparse.Namespace) -> int:
               settings=settings, label=str(args.source))
     resolved = resolve(job, registry, Where(source_file=str(args.source)))
     header = (f"remap {source.adapter}:{source.model} -> {adapter}:{args.model}  ({scene.resolution}x"
-              f"{scene.resolution}, {scene.spp} spp, scheme {settings.scheme}; fitting "
-              f"{', '.join(resolved.free) or 'nothing'})")
+              f"{scene.resolution}, {scene.spp} spp, scheme {settings.scheme}; fitting by default "
+              f"{', '.join(resolved.free) or 'nothing'}{_carried_note(resolved.target_spec)})")
     with owned(args.out) as folder, workers() as w, adapter_pool(registry):
         runner = Runner(Store(folder), w, renderer_files=tuple(registry.loaded_files()), quiet=True,
                         render_progress=RenderProgress(not args.quiet, header), reuse=not args.force)

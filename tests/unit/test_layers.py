@@ -1,0 +1,143 @@
+"""Coat, sheen, anisotropy and transmission carried between renderers (issue 20), without a
+render: the neutral reading carries each layer, the informed start sets it, and the target fits
+the layers the source has (`ParamSpec.fit_when_carried`) and holds the others."""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from brdfremap.adapters.cycles import appearance as cycles
+from brdfremap.adapters.mitsuba import appearance as mitsuba
+from brdfremap.adapters.mitsuba.bsdfs import conductor_preset
+from brdfremap.core.execute import fitted, informed_start
+from brdfremap.core.fitscene import choose
+from brdfremap.core.job import Job, Target, resolve
+from brdfremap.core.plugins import collect_adapters
+from brdfremap.core.scene import ProbeScene
+from brdfremap.core.schemas import Material
+from brdfremap.core.settings import Settings
+
+READINGS = {
+    "cycles": SimpleNamespace(appearance=cycles.appearance, from_appearance=cycles.from_appearance),
+    "mitsuba": SimpleNamespace(appearance=lambda m, p: mitsuba.appearance(m, p, conductor_preset),
+                               from_appearance=lambda m, a, base: mitsuba.from_appearance(m, a)),
+}
+COPPER = {"base_color": [0.955, 0.638, 0.538], "metallic": 1.0, "roughness": 0.35}
+
+
+@pytest.fixture(scope="module")
+def registry():
+    return collect_adapters()
+
+
+def _start(registry, src: Material, adapter: str, model: str, fix=None):
+    job = resolve(Job(source=src, target=Target(adapter=adapter, model=model, fix=fix or {}),
+                      scene=ProbeScene(), settings=Settings(), label="m.yaml"), registry)
+    start = informed_start(job, READINGS)
+    return start, fitted(job, start)
+
+
+def test_a_coat_is_carried_and_fitted_only_when_the_source_has_one(registry):
+    coated = Material(adapter="cycles", model="principled",
+                      params={**COPPER, "coat_weight": 0.2, "coat_roughness": 0.2, "coat_tint": [0.9, 0.7, 0.5]})
+    start, free = _start(registry, coated, "mitsuba", "principled")
+    assert start["clearcoat"] == pytest.approx(0.8)  # a quarter of a full coat per unit of Disney's clearcoat
+    assert start["clearcoat_gloss"] == pytest.approx((0.1 - 0.04) / 0.099)
+    assert {"clearcoat", "clearcoat_gloss"} <= set(free) and "sheen" not in free
+    bare_start, bare_free = _start(registry, Material(adapter="cycles", model="principled", params=COPPER),
+                                   "mitsuba", "principled")
+    assert "clearcoat" not in bare_start and not {"clearcoat", "clearcoat_gloss"} & set(bare_free)
+    # Back to Cycles: the coat is fitted, its tint (which Mitsuba has not) held at the default.
+    back = Material(adapter="mitsuba", model="principled", params={"base_color": [0.9, 0.6, 0.5], "metallic": 1.0,
+                                                                   "clearcoat": 1.0, "clearcoat_gloss": 0.5})
+    start, free = _start(registry, back, "cycles", "principled")
+    assert start["coat_weight"] == 0.25 and {"coat_weight", "coat_roughness"} <= set(free)
+    assert start["coat_tint"] == (1.0, 1.0, 1.0) and "coat_tint" not in free  # held at the reading's (white)
+
+
+def test_a_held_value_the_user_fixes_is_neither_started_nor_fitted(registry):
+    coated = Material(adapter="cycles", model="principled", params={**COPPER, "coat_weight": 0.2})
+    start, free = _start(registry, coated, "mitsuba", "principled", fix={"clearcoat": 0.0})
+    assert "clearcoat" not in start and "clearcoat" not in free
+
+
+def test_anisotropy_carries_its_axes_both_ways(registry):
+    al = Material(adapter="mitsuba", model="roughconductor",
+                  params={"distribution": "ggx", "eta": [1.66, 0.88, 0.52], "k": [9.2, 6.3, 4.8],
+                          "anisotropy": "anisotropic",
+                          "alpha_u": 0.05, "alpha_v": 0.3})
+    start, free = _start(registry, al, "cycles", "principled")
+    assert start["anisotropic"] == pytest.approx((1 - 0.05 / 0.3) / 0.9)
+    assert start["anisotropic_rotation"] == 0.25  # alpha_v the larger: the tangent turned a quarter
+    assert start["roughness"] ** 2 == pytest.approx((0.05 * 0.3) ** 0.5)
+    assert {"anisotropic", "anisotropic_rotation"} <= set(free)
+    brushed = Material(adapter="cycles", model="principled",
+                       params={**COPPER, "anisotropic": 0.9, "anisotropic_rotation": 0.25})
+    start, free = _start(registry, brushed, "mitsuba", "roughconductor")
+    assert start["anisotropy"] == "anisotropic" and start["alpha_u"] < start["alpha_v"]
+    assert {"alpha_u", "alpha_v"} <= set(free) and "alpha" not in free
+
+
+def test_a_glass_keeps_its_ior_and_its_colour(registry):
+    glass = Material(adapter="mitsuba", model="roughdielectric",
+                     params={"alpha": 0.04, "int_ior": 1.6, "specular_transmittance": [0.9, 1.0, 0.95]})
+    start, _ = _start(registry, glass, "cycles", "principled")
+    assert start["transmission_weight"] == 1.0 and start["ior"] == pytest.approx(1.6 / 1.000277)
+    assert start["base_color"] == (0.9, 1.0, 0.95)  # Base Color tints what a glass transmits
+    look = cycles.appearance("principled", registry.get("cycles").models["principled"].complete(
+        {"transmission_weight": 1.0, "base_color": [1, 1, 1], "metallic": 0.0}))
+    assert mitsuba.model_for(look)[0] == "roughdielectric"
+
+
+def test_a_smooth_material_is_fitted_under_the_environment():
+    scene = ProbeScene(resolution=16)
+    renders = []
+
+    def render(sc):
+        renders.append(sc)
+        return np.full((16, 16, 3), 0.5 if sc.environment is not None else 0.0, np.float32)
+
+    got = choose(render, scene, environment_ok=True, limit=0.1, smooth=True)
+    assert got.scene.environment is not None and "perfectly smooth" in got.why
+    assert choose(render, scene, environment_ok=False, limit=0.1, smooth=True).scene.environment is None
+
+
+def test_a_full_glass_holds_its_colour_and_metalness(registry):
+    """The probe's black background hides what a glass transmits: its colour is carried, not fitted."""
+    glass = Material(adapter="cycles", model="principled",
+                     params={"base_color": [1.0, 1.0, 1.0], "metallic": 0.0, "roughness": 0.2,
+                             "transmission_weight": 1.0})
+    for model, colour in (("principled", "base_color"),):
+        start, free = _start(registry, glass, "mitsuba", model)
+        assert start["spec_trans"] == 1.0 and start[colour] == (1.0, 1.0, 1.0)
+        assert colour not in free and "metallic" not in free and "roughness" in free
+    start, free = _start(registry, glass, "cycles", "principled")
+    assert "base_color" not in free and "metallic" not in free
+
+
+def test_part_transmission_is_counted_once(registry):
+    half = Material(adapter="cycles", model="principled",
+                    params={"base_color": [0.8, 0.2, 0.1], "metallic": 0.0, "transmission_weight": 0.5})
+    for adapter in ("cycles", "mitsuba"):
+        start, free = _start(registry, half, adapter, "principled")
+        assert start["base_color"] == pytest.approx((0.8, 0.2, 0.1)) and "base_color" in free
+
+
+def test_a_sheen_tint_comes_back_as_it_went(registry):
+    cloth = Material(adapter="mitsuba", model="principled",
+                     params={"base_color": [0.1, 0.15, 0.45], "sheen": 0.8, "sheen_tint": 0.5})
+    start, _ = _start(registry, cloth, "mitsuba", "principled")
+    assert start["sheen_tint"] == pytest.approx(0.5) and start["sheen"] == 0.8
+
+
+def test_a_blend_weighted_by_a_texture_is_still_two_bsdfs(tmp_path):
+    from brdfremap.core.library.formats import collect_formats, expand_inputs, read_all
+
+    path = tmp_path / "s.xml"
+    path.write_text("<scene version='3.0.0'><texture type='bitmap' id='mask'><string name='filename' value='m.png'/>"
+                    "</texture><bsdf type='blendbsdf' id='mix'><ref name='weight' id='mask'/>"
+                    "<bsdf type='diffuse'/><bsdf type='roughconductor'/></bsdf></scene>")
+    formats = collect_formats()
+    (entry,) = read_all(expand_inputs([str(path)], formats), formats)
+    assert entry.material is not None and entry.textured == ["weight <- bitmap 'm.png'"]
