@@ -175,7 +175,8 @@ PRINCIPLED = ModelSpec(
         _carried("clearcoat_gloss", 0.0, "Clear-coat glossiness (α from 0.1 at 0 to 0.001 at 1)."),
         _unit("spec_trans", 0.0, fit=False, desc="Specular transmission: the probe sees it as reflection lost "
               "to the black background."),
-        _unit("flatness", 0.0, fit=False, desc="Flatness (Mitsuba traverses it; it acts in principledthin)."),
+        _unit("flatness", 0.0, fit=False, desc="Flatness: the diffuse lobe blended towards Hanrahan-Krueger's "
+              "subsurface approximation (Disney)."),
     ),
 )
 

@@ -31,7 +31,7 @@ def _parameter(p) -> str:
     if p.kind == "choice":
         return f"{p.name} ({' | '.join(map(str, p.choices))}; default {p.default})"
     scale = ", log" if p.scale == "log" else ""
-    held = ", held" if not p.fit else ""
+    held = (", held unless the source has it" if p.fit_when_carried else ", held") if not p.fit else ""
     return f"{p.name} ({p.kind} [{p.lower:g}, {p.upper:g}]{scale}{held}; default {format_value(p.default)})"
 
 
