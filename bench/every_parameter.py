@@ -74,7 +74,7 @@ def main() -> int:
     for name, (adapter, model) in ONE_WAY.items():
         if args.only and name != args.only:
             continue
-        r = remap(EXAMPLES / f"{name}.yaml", adapter, model, args.out / name / f"to_{adapter}", args.validate)
+        r = remap(EXAMPLES / f"{name}.yaml", adapter, model, args.out / name / f"to_{adapter}_{model}", args.validate)
         src = yaml.safe_load((EXAMPLES / f"{name}.yaml").read_text())["adapter"]
         print(row(name, f"{src} → {adapter} {model}", r), flush=True)
     return 0
