@@ -185,9 +185,10 @@ class BlenderState:
         along the image's up (+y). The point of a point cloud has no tangent (an anisotropic BSDF
         renders black on it); the mesh's default tangent (radial about the object's Z, from its
         generated coordinates) runs along the latitudes, as Mitsuba's sphere's dp/du does with the
-        same orientation. Isotropic, it renders as the point does to 0.08 % RMSE at 128² (below
-        the 0.4 % noise of 256 spp), but not bit for bit from one process to the next (1e-7: the
-        threaded BVH build), so the exact point stays the probe of everything else."""
+        same orientation. Isotropic, it renders as the point does to 0.05 % RMSE at 128² (below
+        the 0.17 % noise of 256 spp: bench/anisotropy.py), but not bit for bit from one process
+        to the next (1e-7: the threaded BVH build), so the exact point stays the probe of
+        everything else."""
         from brdfremap.adapters.cycles.sphere_mesh import uv_sphere
 
         bpy = self.bpy
