@@ -67,6 +67,11 @@ class Appearance(_Strict):
         n, kk = eta_k_from_reflectivity(self.specular, [edge_tint] * 3)
         return as_rgb(n), as_rgb(kk)
 
+    def opaque_base(self) -> RGB:
+        """The base colour whose untransmitted part is the diffuse albedo (a Principled BSDF's)."""
+        keep = 1.0 - self.transmission
+        return tuple(c / keep for c in self.diffuse) if 0.0 < keep < 1.0 else self.diffuse  # type: ignore
+
     def dielectric_ior(self) -> float:
         """The IOR: as given, else the one whose F0 is the mean specular reflectance."""
         if self.ior is not None:

@@ -15,8 +15,8 @@ from typing import Callable
 import numpy as np
 
 from .metrics import eight_bit, relative_rmse
-from .scene import EnvironmentLight, PointLight, ProbeScene
-from .testing import analytic_lambert, sphere_hits
+from .scene import PointLight, ProbeScene
+from .testing import analytic_lambert, scene_for, sphere_hits
 
 SCENE = ProbeScene(resolution=48, spp=16)
 CALIBRATION = ProbeScene(resolution=64, spp=64)
@@ -104,19 +104,11 @@ def determinism(render: Callable, models: dict) -> Row:
     return Row(name, True, f"{len(models)} model(s), bit for bit")
 
 
-def _scene_for(spec) -> ProbeScene:
-    """A smooth model (a mirror, a smooth glass) shows the point light as a point at most: it is
-    seen under the studio environment."""
-    if spec.smooth:
-        return SCENE.model_copy(update={"lights": [EnvironmentLight(type="environment", map="studio")]})
-    return SCENE
-
-
 def images(render: Callable, models: dict) -> Row:
     name = "images: RGB float, finite, lit, black background"
     n = SCENE.resolution
     for model, spec in models.items():
-        img = np.asarray(render(model, spec.complete({}), _scene_for(spec)))
+        img = np.asarray(render(model, spec.complete({}), scene_for(spec, SCENE)))
         if img.shape != (n, n, 3) or not np.isfinite(img).all() or img.max() <= 0:
             top = float(np.nanmax(img)) if img.size and not np.isnan(img).all() else float("nan")
             return Row(name, False, f"model {model}: shape {img.shape}, max {top:.3g}",

@@ -76,6 +76,14 @@ def point_light_irradiance(scene: ProbeScene, hits: SphereHits, light: PointLigh
     return np.where(hits.mask, light.intensity * cos / dist2, 0.0), l
 
 
+def scene_for(spec, scene: ProbeScene, environment_ok: bool = True) -> ProbeScene:
+    """The scene a model is seen in: under the studio environment for a smooth one (`ModelSpec.smooth`:
+    a point light shows in a mirror as a point at most), where the adapter renders one."""
+    if spec.smooth and environment_ok:
+        return scene.model_copy(update={"lights": [EnvironmentLight(type="environment", map="studio")]})
+    return scene
+
+
 def environment_irradiance(radiance: np.ndarray, normals: np.ndarray, width: int = 128) -> np.ndarray:
     """Irradiance (…, 3) an unoccluded surface of these normals receives from an equirectangular
     map (H x W x 3, `core.environment`'s orientation), integrated over the map box-averaged
@@ -191,11 +199,7 @@ class AdapterContract:
                 spec.complete({k: spec.param(k).clip(v) for k, v in conv.items()})
 
     def _scene_for(self, model: str) -> ProbeScene:
-        """The probe scene, under the studio environment for a smooth model (`ModelSpec.smooth`),
-        where the adapter renders one: a point light shows in a mirror as a point at most."""
-        if self.adapter.models[model].smooth and "environment" in self.adapter.light_types:
-            return self.scene.model_copy(update={"lights": [EnvironmentLight(type="environment", map="studio")]})
-        return self.scene
+        return scene_for(self.adapter.models[model], self.scene, "environment" in self.adapter.light_types)
 
     def test_render_shape_dtype_finite_black_background(self):
         n = self.scene.resolution

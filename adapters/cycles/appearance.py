@@ -65,12 +65,6 @@ def _layers(p: dict[str, Value]) -> dict:
     return out
 
 
-def _opaque_base(a: Appearance) -> tuple[float, float, float]:
-    """The base colour whose untransmitted part is the reading's diffuse albedo."""
-    keep = 1.0 - a.transmission
-    return tuple(c / keep for c in a.diffuse) if 0.0 < keep < 1.0 else a.diffuse  # type: ignore[return-value]
-
-
 def _layer_params(a: Appearance) -> dict[str, Value]:
     """The Principled BSDF's inputs for a reading's coat, sheen, anisotropy and transmission: only
     those it has (an input the reading leaves out stays held at its default)."""
@@ -104,7 +98,7 @@ def from_appearance(model: str, a: Appearance, base: dict[str, Value]) -> dict[s
     if a.distribution is not None and a.distribution in _CHOICES.get(model, ()):
         out["distribution"] = a.distribution  # the source's single-scattering lobe, not multi_ggx's extra energy
     if model == "principled":
-        out.update(base_color=a.specular if metal else _opaque_base(a), metallic=1.0 if metal else 0.0)
+        out.update(base_color=a.specular if metal else a.opaque_base(), metallic=1.0 if metal else 0.0)
         out.update(_layer_params(a))
         if not metal and a.transmission > 0.0:
             out["specular_ior_level"] = 0.5  # a glass's F0 is its IOR's

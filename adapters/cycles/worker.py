@@ -21,6 +21,80 @@ LOBE_PASSES = ("use_pass_diffuse_direct", "use_pass_diffuse_color", "use_pass_gl
 SPHERE_SEGMENTS = 512
 
 
+class ProbeSpheres:
+    """The probe sphere of one scene build: the exact point, and the mesh an anisotropic
+    material needs (made the first time one does)."""
+
+    def __init__(self, scene, sphere: dict):
+        self.scene, self.sphere = scene, sphere
+        self.mesh_probe = None
+        self._point(scene, sphere)
+
+    def _point(self, scene, sphere: dict) -> None:
+        """An exact sphere: one point of a point cloud (Cycles intersects it analytically)."""
+        import bpy
+
+        mesh = bpy.data.meshes.new("probe-centre")
+        mesh.vertices.add(1)
+        mesh.vertices[0].co = (0.0, 0.0, 0.0)
+        mesh.update()
+        obj = bpy.data.objects.new("probe", mesh)
+        obj.location = tuple(sphere["center"])
+        scene.collection.objects.link(obj)
+        tree = bpy.data.node_groups.new("probe-sphere", "GeometryNodeTree")
+        tree.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
+        tree.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+        gin, gout = tree.nodes.new("NodeGroupInput"), tree.nodes.new("NodeGroupOutput")
+        points = tree.nodes.new("GeometryNodeMeshToPoints")
+        points.inputs["Radius"].default_value = sphere["radius"]
+        self.set_material = tree.nodes.new("GeometryNodeSetMaterial")
+        tree.links.new(gin.outputs[0], points.inputs["Mesh"])
+        tree.links.new(points.outputs[0], self.set_material.inputs["Geometry"])
+        tree.links.new(self.set_material.outputs[0], gout.inputs[0])
+        mod = obj.modifiers.new("probe-sphere", "NODES")
+        mod.node_group = tree
+        self.probe = obj
+
+    def _mesh(self, scene, sphere: dict) -> None:
+        """The probe for anisotropic materials: a smooth UV-sphere mesh of 512 x 256 faces, its pole
+        along the image's up (+y). The point of a point cloud has no tangent (an anisotropic BSDF
+        renders black on it); the mesh's default tangent (radial about the object's Z, from its
+        generated coordinates) runs along the latitudes, as Mitsuba's sphere's dp/du does with the
+        same orientation. Isotropic, it renders as the point does to 0.05 % RMSE at 128² (below
+        the 0.17 % noise of 256 spp: bench/anisotropy.py), but not bit for bit from one process
+        to the next (1e-7: the threaded BVH build), so the exact point stays the probe of
+        everything else."""
+        import bpy
+
+        from brdfremap.adapters.cycles.sphere_mesh import uv_sphere
+
+        mesh = bpy.data.meshes.new("probe-mesh")
+        verts, faces = uv_sphere(SPHERE_SEGMENTS, SPHERE_SEGMENTS // 2)
+        mesh.from_pydata(verts.tolist(), [], faces)
+        mesh.shade_smooth()
+        mesh.materials.append(None)
+        obj = bpy.data.objects.new("probe-mesh", mesh)
+        obj.location = tuple(sphere["center"])
+        obj.rotation_euler = (-math.pi / 2, 0.0, 0.0)  # the object's Z (the pole) along the scene's +y
+        obj.scale = (sphere["radius"],) * 3
+        obj.hide_render = True
+        scene.collection.objects.link(obj)
+        self.mesh_probe = obj
+
+    def use(self, mat, anisotropic: bool) -> None:
+        """The material on the probe this render needs, the other probe hidden."""
+        if anisotropic and self.mesh_probe is None:
+            self._mesh(self.scene, self.sphere)
+        if anisotropic:
+            if self.mesh_probe.data.materials[0] != mat:
+                self.mesh_probe.data.materials[0] = mat
+        elif self.set_material.inputs["Material"].default_value != mat:
+            self.set_material.inputs["Material"].default_value = mat
+        if self.mesh_probe is not None and self.mesh_probe.hide_render != (not anisotropic):
+            self.mesh_probe.hide_render = not anisotropic
+            self.probe.hide_render = anisotropic
+
+
 class BlenderState:
     def __init__(self):
         import bpy
@@ -29,8 +103,7 @@ class BlenderState:
         self.scene_key = None
         self.passes = None
         self.materials = {}
-        self.probe = None
-        self.mesh_probe = None
+        self.probes = None
 
     # -- scene -------------------------------------------------------------------------
     def setup_scene(self, sc_json: dict) -> None:
@@ -80,9 +153,7 @@ class BlenderState:
         self._camera(scene, sc_json["camera"])
         for i, light in enumerate(x for x in sc_json["lights"] if x["type"] == "point"):
             self._light(scene, light, "probe-light" if i == 0 else f"probe-light{i}")
-        self._sphere(scene, sc_json["sphere"])
-        self.mesh_probe = None  # made when an anisotropic material first needs it
-        self.sphere = sc_json["sphere"]
+        self.probes = ProbeSpheres(scene, sc_json["sphere"])
         # A few lights: nothing for a light tree to choose between (bench/cycles_render.py).
         cy.use_light_tree = False
         self.passes = None  # the lobe passes are switched on per request (see render)
@@ -156,68 +227,6 @@ class BlenderState:
         obj.location = tuple(light["position"])
         scene.collection.objects.link(obj)
 
-    def _sphere(self, scene, sphere: dict) -> None:
-        """An exact sphere: one point of a point cloud (Cycles intersects it analytically)."""
-        bpy = self.bpy
-        mesh = bpy.data.meshes.new("probe-centre")
-        mesh.vertices.add(1)
-        mesh.vertices[0].co = (0.0, 0.0, 0.0)
-        mesh.update()
-        obj = bpy.data.objects.new("probe", mesh)
-        obj.location = tuple(sphere["center"])
-        scene.collection.objects.link(obj)
-        tree = bpy.data.node_groups.new("probe-sphere", "GeometryNodeTree")
-        tree.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
-        tree.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
-        gin, gout = tree.nodes.new("NodeGroupInput"), tree.nodes.new("NodeGroupOutput")
-        points = tree.nodes.new("GeometryNodeMeshToPoints")
-        points.inputs["Radius"].default_value = sphere["radius"]
-        self.set_material = tree.nodes.new("GeometryNodeSetMaterial")
-        tree.links.new(gin.outputs[0], points.inputs["Mesh"])
-        tree.links.new(points.outputs[0], self.set_material.inputs["Geometry"])
-        tree.links.new(self.set_material.outputs[0], gout.inputs[0])
-        mod = obj.modifiers.new("probe-sphere", "NODES")
-        mod.node_group = tree
-        self.probe = obj
-
-    def _mesh_sphere(self, scene, sphere: dict) -> None:
-        """The probe for anisotropic materials: a smooth UV-sphere mesh of 512 x 256 faces, its pole
-        along the image's up (+y). The point of a point cloud has no tangent (an anisotropic BSDF
-        renders black on it); the mesh's default tangent (radial about the object's Z, from its
-        generated coordinates) runs along the latitudes, as Mitsuba's sphere's dp/du does with the
-        same orientation. Isotropic, it renders as the point does to 0.05 % RMSE at 128² (below
-        the 0.17 % noise of 256 spp: bench/anisotropy.py), but not bit for bit from one process
-        to the next (1e-7: the threaded BVH build), so the exact point stays the probe of
-        everything else."""
-        from brdfremap.adapters.cycles.sphere_mesh import uv_sphere
-
-        bpy = self.bpy
-        mesh = bpy.data.meshes.new("probe-mesh")
-        verts, faces = uv_sphere(SPHERE_SEGMENTS, SPHERE_SEGMENTS // 2)
-        mesh.from_pydata(verts.tolist(), [], faces)
-        mesh.shade_smooth()
-        mesh.materials.append(None)
-        obj = bpy.data.objects.new("probe-mesh", mesh)
-        obj.location = tuple(sphere["center"])
-        obj.rotation_euler = (-math.pi / 2, 0.0, 0.0)  # the object's Z (the pole) along the scene's +y
-        obj.scale = (sphere["radius"],) * 3
-        obj.hide_render = True
-        scene.collection.objects.link(obj)
-        self.mesh_probe = obj
-
-    def _use_probe(self, mat, anisotropic: bool) -> None:
-        """The material on the probe this render needs, the other probe hidden."""
-        if anisotropic and self.mesh_probe is None:
-            self._mesh_sphere(self.bpy.context.scene, self.sphere)
-        if anisotropic:
-            if self.mesh_probe.data.materials[0] != mat:
-                self.mesh_probe.data.materials[0] = mat
-        elif self.set_material.inputs["Material"].default_value != mat:
-            self.set_material.inputs["Material"].default_value = mat
-        if self.mesh_probe is not None and self.mesh_probe.hide_render != (not anisotropic):
-            self.mesh_probe.hide_render = not anisotropic
-            self.probe.hide_render = anisotropic
-
     # -- materials ---------------------------------------------------------------------
     def new_material(self, model: str, name: str):
         """A material whose surface is the model's BSDF node: (material, node)."""
@@ -261,7 +270,7 @@ class BlenderState:
         t0 = time.perf_counter()
         self.setup_scene(req["scene"])
         mat = self.material(req["model"], req["params"])
-        self._use_probe(mat, float(req["params"].get("anisotropic", 0.0)) > 0.0)
+        self.probes.use(mat, float(req["params"].get("anisotropic", 0.0)) > 0.0)
         scene = self.bpy.context.scene
         scene.render.filepath = req["out"]
         # The lobe passes only when a lobe is asked for: accumulating them costs about 13 % of a

@@ -50,13 +50,17 @@ def emitters(scene: ProbeScene) -> dict[str, Any]:
     return out
 
 
-def _conductor(kind: str, p: dict[str, Value]) -> dict[str, Any]:
-    d: dict[str, Any] = {"type": kind, "specular_reflectance": _rgb(p["specular_reflectance"])}
+def _conductor_ior(p: dict[str, Value]) -> dict[str, Any]:
+    """A conductor's Fresnel: eta and k, reflectivity and edge tint, or a named preset."""
     if p["material"] == "none":
-        d.update(eta=_rgb(p["eta"]), k=_rgb(p["k"]))
-    else:
-        d["material"] = p["material"]
-    return d
+        return {"eta": _rgb(p["eta"]), "k": _rgb(p["k"])}
+    if p["material"] == "reflectivity":
+        return {"reflectivity": _rgb(p["reflectivity"]), "edge_tint": _rgb(p["edge_tint"])}
+    return {"material": p["material"]}
+
+
+def _conductor(kind: str, p: dict[str, Value]) -> dict[str, Any]:
+    return {"type": kind, "specular_reflectance": _rgb(p["specular_reflectance"]), **_conductor_ior(p)}
 
 
 def _roughconductor(p: dict[str, Value]) -> dict[str, Any]:
@@ -99,15 +103,8 @@ def _legacy(model: str, p: dict[str, Value]) -> dict[str, Any]:
 
 
 def _as_conductor(p: dict[str, Value]) -> dict[str, Any]:
-    d = {"type": "ashikhmin_shirley", "form": "conductor", "alpha": p["alpha"],
-         "specular_reflectance": _rgb(p["specular_reflectance"])}
-    if p["material"] == "none":
-        d.update(eta=_rgb(p["eta"]), k=_rgb(p["k"]))
-    elif p["material"] == "reflectivity":
-        d.update(reflectivity=_rgb(p["reflectivity"]), edge_tint=_rgb(p["edge_tint"]))
-    else:
-        d["material"] = p["material"]
-    return d
+    return {"type": "ashikhmin_shirley", "form": "conductor", "alpha": p["alpha"],
+            "specular_reflectance": _rgb(p["specular_reflectance"]), **_conductor_ior(p)}
 
 
 def _as_plastic(p: dict[str, Value]) -> dict[str, Any]:

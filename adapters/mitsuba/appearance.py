@@ -148,12 +148,6 @@ def from_appearance(model: str, a: Appearance) -> dict[str, Value]:
     return out
 
 
-def _opaque_base(a: Appearance) -> tuple[float, float, float]:
-    """The base colour whose untransmitted part is the reading's diffuse albedo."""
-    keep = 1.0 - a.transmission
-    return tuple(c / keep for c in a.diffuse) if 0.0 < keep < 1.0 else a.diffuse  # type: ignore[return-value]
-
-
 def _sheen_tint(tint, base) -> float:
     """Disney's sheen_tint t whose colour 1 - t + t·hue(base) is nearest a sheen colour (least squares)."""
     hue = _hue(base)
@@ -166,7 +160,7 @@ def _sheen_tint(tint, base) -> float:
 def _principled_params(a: Appearance, metal: bool) -> dict[str, Value]:
     out: dict[str, Value] = {
         "base_color": a.specular if metal else (a.transmittance if a.transmission > 0 and max(a.diffuse) == 0
-                                                else _opaque_base(a)),
+                                                else a.opaque_base()),
         "metallic": 1.0 if metal else 0.0,
         "specular": min(float(sum(a.specular)) / 3 / 0.08, 1.0) if not metal else 0.5}
     if a.anisotropy > 0.0:
