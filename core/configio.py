@@ -111,7 +111,7 @@ def validation_message(exc: ValidationError) -> tuple[str, str]:
 
 
 _ROLES = {"a result (result.json)": {"schema_version", "key"}, "a material": {"adapter", "model"},
-          "an experiment": {"kind", "sweep"},
+          "an experiment": {"kind", "sweep"}, "a table spec": {"kind", "axes"},
           "a renderer definition": {"name", "command"}, "a scene": {"sphere", "camera"}}
 
 

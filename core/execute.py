@@ -30,6 +30,7 @@ from .protocol import Adapter
 from .renders import CachedRenderer, ProbeRenders
 from .report import FileRecord, Report, build_report
 from .schemas import Value
+from .texturing import Texturing, texture_result
 
 
 IMAGES = ("source.exr", "target.exr", "source.png", "target.png", "error.png")
@@ -117,25 +118,58 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
                        smooth=resolved.source_spec.smooth or resolved.target_spec.smooth)
     renders = ProbeRenders(source, resolved.source_params, resolved.source_spec, target, fit.scene, given=job.scene,
                            given_noise=fit.scene_noise)
-    start = informed_start(resolved, adapters) if job.settings.start == "informed" else {}
-    free = fitted(resolved, start)
+    informed = job.settings.start == "informed" and job.lookup is None
+    start = informed_start(resolved, adapters) if informed else {}
+    free = fitted(resolved, start) if job.lookup is None else []
     result = remap(resolved.target_spec, {**resolved.base, **start}, free, renders, job.settings, job.tuning,
-                   progress, alternatives=alternatives(resolved, start) if job.settings.start == "informed" else [])
-    files = artifacts(adapters[tgt.adapter], tgt.model, result.params, renders.source_image(), result.target_image)
+                   progress, alternatives=alternatives(resolved, start) if informed else [],
+                   notes=lookup_notes(job))
+    texturing = texture_result(resolved, adapters[src.adapter], adapters[tgt.adapter], result.params) \
+        if src.textures else None
+    files = artifacts(adapters[tgt.adapter], tgt.model, result.params, renders.source_image(), result.target_image,
+                      texturing)
     info = describe(adapters, list(dict.fromkeys((src.adapter, tgt.adapter))))
     derived = (adapters[src.adapter].derived(src.model, resolved.source_params),
                adapters[tgt.adapter].derived(tgt.model, result.params))
     report = build_report(resolved, result, start=start, derived=derived, fit_scene=fit, source_renders=renders.source_renders(),
                           renders_by_resolution=target.renders_by_resolution(), seconds=time.perf_counter() - t0,
                           adapters=info, files=[FileRecord(name=n, sha256=hashlib.sha256(b).hexdigest(), bytes=len(b))
-                                                for n, b in files.items()])
+                                                for n, b in files.items()],
+                          textures=texturing.record if texturing else None)
     return Outcome(report, renders.source_image(), result.target_image, files)
 
 
+def _textured_files(d: Path, adapter: Adapter, model: str, texturing: Texturing) -> list[Path]:
+    paths = []
+    for name, data in texturing.files.items():
+        (d / name).write_bytes(data)
+        paths.append(d / name)
+    paths += [Path(p) for p in adapter.write_native(model, texturing.params, d, textures=texturing.native)]
+    if texturing.images is not None:
+        src, tgt = texturing.images
+        write_exr(d / "source-textured.exr", src)
+        write_exr(d / "target-textured.exr", tgt)
+        write_previews(d, src, tgt, prefix="textured-")
+        paths += [d / n for n in ("source-textured.exr", "target-textured.exr", "textured-source.png",
+                                  "textured-target.png", "textured-error.png")]
+    return paths
+
+
+def lookup_notes(job: Job) -> list:
+    """The finding that says a lookup's parameters came from a table ([] for a fit)."""
+    from .findings import TableLookup
+
+    lk = job.lookup
+    if lk is None:
+        return []
+    return [TableLookup(table=lk.table, method=lk.method, expected_error=lk.expected_error, outside=lk.outside)]
+
+
 def artifacts(adapter: Adapter, model: str, params: dict[str, Value], source: np.ndarray,
-              target: np.ndarray) -> dict[str, bytes]:
+              target: np.ndarray, texturing: Texturing | None = None) -> dict[str, bytes]:
     """The result's files, by name: linear EXRs, PNG previews, the material in the target's own form
-    (made in a temporary folder, where this process runs, and handed over as bytes)."""
+    (made in a temporary folder, where this process runs, and handed over as bytes); a textured
+    source's maps, the native material reading them, and the textured check's images."""
     try:
         with tempfile.TemporaryDirectory(prefix="brdfremap-") as tmp:
             d = Path(tmp)
@@ -143,7 +177,10 @@ def artifacts(adapter: Adapter, model: str, params: dict[str, Value], source: np
             write_exr(d / "target.exr", target)
             write_previews(d, source, target)
             paths = [d / n for n in IMAGES]
-            paths += [Path(p) for p in adapter.write_native(model, params, d)]
+            if texturing is None:
+                paths += [Path(p) for p in adapter.write_native(model, params, d)]
+            else:
+                paths += _textured_files(d, adapter, model, texturing)
             return {p.name: p.read_bytes() for p in paths}
     except (OSError, RemapError) as exc:
         reason = why(exc) if isinstance(exc, OSError) else str(exc).split(": ", 1)[-1]

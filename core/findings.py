@@ -193,6 +193,25 @@ class NothingFitted(_Note):
         return "every parameter was held: the two materials are compared as given, nothing was fitted"
 
 
+class TableLookup(_Note):
+    """The parameters came from a remap table: nothing was fitted, the errors judge the lookup."""
+
+    kind: Literal["table_lookup"] = "table_lookup"
+    table: str
+    method: str
+    expected_error: float | None = Field(None, description="The relative RMSE the table's direct fits reach about "
+                                                           "these source values.")
+    outside: list[str] = Field(default_factory=list, description="Source values the map clamped to its range.")
+
+    def sentence(self) -> str:
+        text = f"parameters from the remap table {self.table!r} ({self.method} map), not fitted"
+        if self.expected_error is not None:
+            text += f"; direct fits about these source values reach about {self.expected_error:.1%}"
+        if self.outside:
+            text += "; outside the table, clamped: " + ", ".join(self.outside)
+        return text
+
+
 class StartKept(_Note):
     """Every fitted point was worse at the scene's resolution and samples than the informed start."""
 
@@ -282,7 +301,7 @@ class NoisePolished(_Note):
 Finding = Annotated[
     Union[ErrorAboveThreshold, ModelMismatch, HeldOutAbove, CannotResolve, ImagePrecision, NoEffect, IllConditioned,
           NotAtMinimum,
-          PinnedOnBound, RendererAlters, ValidationSkipped, NothingFitted, StartKept, ChoiceTried, SchemeChosen, DeadParameters,
+          PinnedOnBound, RendererAlters, ValidationSkipped, NothingFitted, TableLookup, StartKept, ChoiceTried, SchemeChosen, DeadParameters,
           JointRefined, PredictionNotRealised, NoisePolished],
     Field(discriminator="kind"),
 ]

@@ -182,13 +182,13 @@ def write_png(path: Path, pixels8: np.ndarray) -> None:
     _write(path, np.ascontiguousarray(pixels8), "uint8")
 
 
-def write_previews(out_dir: Path, source: np.ndarray, target: np.ndarray) -> float:
-    """source.png, target.png (one exposure, from the source) and error.png; returns the error
-    map's full scale (a fraction of the source's bright end)."""
+def write_previews(out_dir: Path, source: np.ndarray, target: np.ndarray, prefix: str = "") -> float:
+    """source.png, target.png (one exposure, from the source) and error.png (each name after
+    ``prefix``); returns the error map's full scale (a fraction of the source's bright end)."""
     k = display_exposure(source)
-    write_png(out_dir / "source.png", preview(source, k))
-    write_png(out_dir / "target.png", preview(target, k))
+    write_png(out_dir / f"{prefix}source.png", preview(source, k))
+    write_png(out_dir / f"{prefix}target.png", preview(target, k))
     err = np.abs((np.asarray(target, np.float64) - np.asarray(source, np.float64)) @ _LUMA) * k
     scale = error_scale(err)
-    write_png(out_dir / "error.png", error_preview(err, scale))
+    write_png(out_dir / f"{prefix}error.png", error_preview(err, scale))
     return scale

@@ -32,6 +32,22 @@ class Target(Strict):
     fix: dict[str, Any] = Field(default_factory=dict, description="Target parameters held at these values.")
 
 
+class Lookup(Strict):
+    """The target's parameters read from a remap table instead of fitted: the result renders them
+    and judges them like a fit's."""
+
+    table: str = Field(description="The table's name.")
+    digest: str = Field(description="The table file's digest (another table, another job).")
+    file: str = Field("", description="Where the table was read (its map remaps a textured source texel by texel); "
+                                      "not in the key.")
+    method: str = Field(description="The table's map that gave the parameters.")
+    params: dict[str, Any] = Field(description="The target's parameters the map gave (complete).")
+    expected_error: float | None = Field(None, description="The relative RMSE the table's direct fits reach about "
+                                                           "these source values.")
+    outside: list[str] = Field(default_factory=list, description="Source values outside the table's range (the "
+                                                                 "map clamped them), in words.")
+
+
 class Job(Strict):
     """A remap request, complete: what determines its result, and a label for people."""
 
@@ -43,19 +59,26 @@ class Job(Strict):
     label: str = Field("", description="Where the source came from (a file, a point, a material); not in the key.")
     versions: dict[str, str] = Field(default_factory=dict, description="Versions of the adapters involved, "
                                                                        "recorded by `resolve`; in the key.")
+    lookup: Lookup | None = Field(None, description="Parameters from a remap table: rendered and judged, not "
+                                                    "fitted.")
 
     def key(self) -> str:
         """The hash of everything that determines the result (the engine version included),
         not of labels, names or notes."""
         doc = {
             "engine": ENGINE_VERSION,
-            "source": self.source.model_dump(mode="json", exclude={"name"}),
+            "source": self.source.model_dump(mode="json", exclude={"name", "textures"}),
             "target": self.target.model_dump(mode="json"),
             "scene": json.loads(self.scene.cache_key()),
             "settings": self.settings.model_dump(mode="json"),
             "tuning": self.tuning.model_dump(mode="json"),
             "versions": self.versions,
         }
+        # Absent from the key when unused: fits stored before tables and textures keep their keys.
+        if self.lookup is not None:
+            doc["lookup"] = self.lookup.model_dump(mode="json", exclude={"file"})
+        if self.source.textures:  # an image by its content, not its path
+            doc["textures"] = {k: t.model_dump(mode="json", exclude={"file"}) for k, t in self.source.textures.items()}
         blob = json.dumps(doc, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(blob.encode()).hexdigest()[:20]
 
@@ -117,15 +140,21 @@ def resolve(job: Job, registry: AdapterRegistry, where: Where = Where()) -> Reso
             if p.kind == "choice":
                 base[p.name] = src_params[p.name]
     base.update(fixed)
+    if job.lookup is not None:
+        looked = {k: v for k, v in job.lookup.params.items() if k not in fixed}
+        base.update({k: v for k, v in tgt_spec.complete(looked, file=where.target_file,
+                                                         prefix="lookup.params").items() if k in looked})
     _check_fixed(tgt_spec, base, fixed, where)
     _check_sampling(job, where)
     _check_scene(registry, job, where)
-    free = tgt_spec.fittable(base, fixed=set(fixed))
+    free = [] if job.lookup is not None else tgt_spec.fittable(base, fixed=set(fixed))
     versions = {name: registry.get(name).version for name in dict.fromkeys((src.adapter, tgt.adapter))}
     canonical = job.model_copy(update={
         "source": src.model_copy(update={"params": _plain(src_params)}),
         "target": tgt.model_copy(update={"fix": _plain(fixed)}),
         "versions": versions,
+        "lookup": None if job.lookup is None else job.lookup.model_copy(update={"params": _plain(
+            {k: base[k] for k in job.lookup.params})}),
     })
     return Resolved(canonical, src_spec, tgt_spec, src_params, base, free, fixed)
 

@@ -214,9 +214,10 @@ def collect_schemas(pm: PluginManager | None = None) -> dict[str, Any]:
     from .scene import ProbeScene
     from .schemas import Material
     from .settings import Settings
+    from .tables import Table, TableSpec
 
     out: dict[str, Any] = {"report": Report, "material": Material, "scene": ProbeScene, "experiment": Experiment,
-                           "job": Job, "settings": Settings}
+                           "job": Job, "settings": Settings, "table": Table, "table-spec": TableSpec}
     pm = pm or get_plugin_manager()
 
     def register(name: str, model: Any) -> None:

@@ -13,6 +13,7 @@ from .appearance import Appearance
 from .errors import RenderError
 from .scene import ProbeScene
 from .schemas import ModelSpec, Value
+from .textures import Texture, TextureMap
 
 
 @dataclass(frozen=True)
@@ -37,6 +38,9 @@ class Adapter(abc.ABC):
     install_hint: ClassVar[str] = ""
     models: ClassVar[dict[str, ModelSpec]] = {}
     light_types: ClassVar[frozenset[str]] = frozenset({"point"})
+    textures: ClassVar[bool] = False
+    """Whether it renders textures (`render_textured`) and writes them into its native files, for the
+    parameters each model lists as `texturable`."""
     calibration: ClassVar[tuple[str, dict] | None] = None
     """A white diffuse material of albedo 0.8 (model, params), which `remap check` renders against
     the analytic radiance; None: the adapter has none to offer."""
@@ -63,6 +67,14 @@ class Adapter(abc.ABC):
 
         ``params`` is complete and validated (see ``ModelSpec.complete``). ``lobe`` is None for
         the full material, or "diffuse" / "specular" for that lobe alone."""
+
+    def render_textured(self, model: str, params: dict[str, Value], maps: dict[str, TextureMap],
+                        scene: ProbeScene) -> np.ndarray:
+        """Render the probe sphere with some parameters driven by images (``maps``, of `texturable`
+        parameters, their values used as they are: no colour conversion), laid over the sphere by
+        `core.textures`' texture coordinates; the other parameters as ``params`` gives them. Only
+        for an adapter whose ``textures`` is true."""
+        raise RenderError(f"adapter {self.name!r} does not render textures")
 
     def render_batch(self, requests: list[tuple[str, dict[str, Value], ProbeScene, str | None]]) -> list[np.ndarray]:
         """Several renders (model, params, scene, lobe) at once; an adapter with several workers
@@ -115,8 +127,11 @@ class Adapter(abc.ABC):
         e.g. a reflectance it trims to conserve energy. A note makes a fitted result unreliable."""
         return []
 
-    def write_native(self, model: str, params: dict[str, Value], out_dir: Path) -> list[Path]:
-        """Write the material in the renderer's own form; return the files written."""
+    def write_native(self, model: str, params: dict[str, Value], out_dir: Path,
+                     textures: dict[str, Texture] | None = None) -> list[Path]:
+        """Write the material in the renderer's own form; return the files written. ``textures``
+        (an adapter whose ``textures`` is true): parameters read from images already in ``out_dir``
+        (their `file` a name there), referenced by the material as relative paths."""
         return []
 
     def close(self) -> None:

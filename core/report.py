@@ -24,9 +24,11 @@ from .model import Strict as _Strict
 from .model import WithDerived
 from .renders import rounded
 from .scene import ProbeScene
+from .texturing import Textured
 
-SCHEMA_VERSION = 3
-"""Bump whenever the fields change (an older reader refuses a field it does not know)."""
+SCHEMA_VERSION = 4
+"""Bump whenever the fields change (an older reader refuses a field it does not know). 4: a job's
+table lookup, a textured source's record."""
 
 
 class NewerReportError(ConfigError):
@@ -123,6 +125,8 @@ class Report(WithDerived):
                                                             "variant).")
     host: dict[str, str]
     files: list[FileRecord] = Field(description="The files of this result beside result.json, with their hashes.")
+    textures: Textured | None = Field(None, description="A textured source remapped texel by texel through a "
+                                                        "table: its maps and the textured check.")
 
     @computed_field  # type: ignore[prop-decorator]
     @property
@@ -157,7 +161,8 @@ class Report(WithDerived):
 
 def build_report(resolved: Resolved, result: EngineResult, *, start: dict, derived: tuple[dict, dict], fit_scene,
                  source_renders: int, renders_by_resolution: dict[str, int], seconds: float,
-                 adapters: dict[str, dict[str, Any]], files: list[FileRecord]) -> Report:
+                 adapters: dict[str, dict[str, Any]], files: list[FileRecord],
+                 textures: Textured | None = None) -> Report:
     """The report, in one place: ``derived`` holds the source's and the target's derived quantities."""
     from . import __version__
 
@@ -185,7 +190,7 @@ def build_report(resolved: Resolved, result: EngineResult, *, start: dict, deriv
         fit_scene=None if not fit_scene.why else FitSceneRecord(why=fit_scene.why, scene=fit_scene.scene,
                                                                  source_noise_given=fit_scene.scene_noise,
                                                                  source_noise=fit_scene.noise), adapters=adapters,
-        host={"python": platform.python_version(), "machine": platform.machine()}, files=files)
+        host={"python": platform.python_version(), "machine": platform.machine()}, files=files, textures=textures)
 
 
 def _finite(x: float | None) -> float | None:

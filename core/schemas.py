@@ -10,6 +10,7 @@ from pydantic import Field, ValidationError, model_validator
 
 from .errors import ConfigError
 from .model import Strict as _Strict
+from .textures import Texture
 
 Value = float | tuple[float, float, float] | str
 LOBES = ("diffuse", "specular")
@@ -146,6 +147,8 @@ class ModelSpec(_Strict):
     smooth: bool = Field(False, description="Its reflection is perfectly smooth (a mirror, a smooth glass): a point "
                                             "light shows in it as a point at most, so it is seen, and fitted, "
                                             "under an environment.")
+    texturable: tuple[str, ...] = Field((), description="Parameters the renderer takes as an image, texel by "
+                                                        "texel (`Adapter.render_textured`, native files).")
     derived: tuple[str, ...] = Field((), description="Quantities the adapter derives from the parameters "
                                                      "(Adapter.derived: a conductor's reflectivity), for reports and "
                                                      "experiment plots.")
@@ -159,6 +162,9 @@ class ModelSpec(_Strict):
             for n in (*lobe.params, *lobe.overrides):
                 if n not in names:
                     raise ValueError(f"model {self.name!r}: lobe refers to unknown parameter {n!r}")
+        for n in self.texturable:
+            if n not in names or self.param(n).kind == "choice":
+                raise ValueError(f"model {self.name!r}: texturable {n!r} is not a numeric parameter")
         for p in self.parameters:
             for n in p.inert_when:
                 if n not in names or n == p.name:
@@ -229,6 +235,9 @@ class Material(_Strict):
     model: str = Field(description="Material model of that adapter.")
     params: dict[str, Any] = Field(default_factory=dict, description="Parameter values; others take defaults.")
     name: str = Field("", description="Optional label.")
+    textures: dict[str, Texture] = Field(default_factory=dict, description="Parameters driven by an image, texel by "
+                                                                            "texel (its `params` value is the one "
+                                                                            "used without the texture).")
 
 
 def load_material(path: str | Path) -> Material:

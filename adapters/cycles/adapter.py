@@ -21,6 +21,7 @@ from brdfremap.core.errors import ConfigError, RenderError
 from brdfremap.core.protocol import Adapter, ModelChoice
 from brdfremap.core.scene import ProbeScene
 from brdfremap.core.schemas import Value
+from brdfremap.core.textures import Texture, TextureMap
 from brdfremap.core.scratch import scratch_dir
 from brdfremap.core.workerproc import JsonLinesWorker
 
@@ -94,6 +95,12 @@ def lobe_image(passes: dict[str, np.ndarray], lobe: str | None) -> np.ndarray:
     raise RenderError(f"cycles: unknown lobe {lobe!r}")
 
 
+def texture_request(folder: Path, textures: dict[str, Texture] | None) -> dict[str, dict[str, str]]:
+    """Textures as the worker takes them: absolute files (of names relative to ``folder``)."""
+    return {k: {"file": str((Path(folder) / t.file).resolve()), "colorspace": t.colorspace, "filter": t.filter}
+            for k, t in (textures or {}).items()}
+
+
 class CyclesAdapter(Adapter):
     name = "cycles"
     summary = "Blender Cycles (bpy, CPU) in a persistent worker process"
@@ -101,6 +108,7 @@ class CyclesAdapter(Adapter):
     models = MODELS
     light_types = frozenset({"point", "environment"})
     calibration = ("diffuse", {"color": 0.8})
+    textures = True
     max_cached = 8
 
     @classmethod
@@ -258,18 +266,47 @@ class CyclesAdapter(Adapter):
     def model_for(self, appearance: Appearance) -> ModelChoice:
         return ModelChoice(*_appearance.model_for(appearance))
 
-    def write_native(self, model: str, params: dict[str, Value], out_dir: Path) -> list[Path]:
+    def render_textured(self, model: str, params: dict[str, Value], maps: dict[str, TextureMap],
+                        scene: ProbeScene) -> np.ndarray:
+        """The probe mesh (its UV map) with an Image Texture node per map: the values written as
+        float EXRs and read as Non-Color (as they are)."""
+        from brdfremap.core.imageio import write_exr
+
+        self.renders += 1
+        files = []
+        try:
+            textures = {}
+            for name, m in maps.items():
+                path = os.path.join(self.scratch, f"t{self.renders}-{name}.exr")
+                values = m.values if m.values.ndim == 3 else np.repeat(m.values[..., None], 3, axis=-1)
+                write_exr(Path(path), values)
+                files.append(path)
+                textures[name] = {"file": path, "colorspace": "linear", "filter": m.filter}
+            _, req = self._request(model, params, scene)
+            out = os.path.join(self.scratch, f"r{self.renders}.exr")
+            files.append(out)
+            self.worker.request({"op": "render", "out": out, "passes": False, "textures": textures, **req})
+            return read_passes(out, PASSES[:1])["Combined"]
+        finally:
+            for f in files:
+                try:
+                    os.unlink(f)
+                except OSError:
+                    pass
+
+    def write_native(self, model: str, params: dict[str, Value], out_dir: Path,
+                     textures: dict[str, Texture] | None = None) -> list[Path]:
         out_dir = Path(out_dir)
         blend = out_dir / "material.blend"
         tmp = temp_beside(blend)
         try:
             self.worker.request({"op": "save_blend", "model": model, "name": "brdf-remap",
                                  "params": {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()},
-                                 "path": str(tmp.resolve())})
+                                 "textures": texture_request(out_dir, textures), "path": str(tmp.resolve())})
             os.replace(tmp, blend)
         finally:
             tmp.unlink(missing_ok=True)
-        snippet = write_text_atomic(out_dir / "material.py", python_snippet(model, params))
+        snippet = write_text_atomic(out_dir / "material.py", python_snippet(model, params, textures=textures))
         return [blend, snippet]
 
     def close(self) -> None:

@@ -52,8 +52,8 @@ def enum_value(v: str) -> str:
     return v.upper()
 
 
-def python_snippet(model: str, params: dict[str, Value], name: str = "brdf-remap") -> str:
-    """A short bpy script that recreates the material."""
+def python_snippet(model: str, params: dict[str, Value], name: str = "brdf-remap", textures=None) -> str:
+    """A short bpy script that recreates the material (its textures read from beside the script)."""
     node_type, inputs, props = NODES[model]
     lines = [
         "# Recreates the remapped material in Blender (Cycles). Run in Blender's Python console",
@@ -81,6 +81,16 @@ def python_snippet(model: str, params: dict[str, Value], name: str = "brdf-remap
         v = socket_value(model, pname, params[pname])
         shown = "(" + ", ".join(f"{x:.6g}" for x in v) + ")" if isinstance(v, tuple) else f"{v:.6g}"
         lines.append(f"socket({sock!r}).default_value = {shown}")
+    if textures:
+        lines += ["", "import os", "", "here = os.path.dirname(os.path.abspath(__file__))"]
+    for i, (pname, tex) in enumerate(sorted((textures or {}).items())):
+        space = "sRGB" if tex.colorspace == "srgb" else "Non-Color"
+        interp = "Closest" if tex.filter == "nearest" else "Linear"
+        lines += ["tex = nodes.new('ShaderNodeTexImage')",
+                  f"tex.image = bpy.data.images.load(os.path.join(here, {tex.file!r}))",
+                  f"tex.image.colorspace_settings.name = {space!r}",
+                  f"tex.interpolation, tex.label, tex.location = {interp!r}, {pname!r}, (-400, {-300 * i})",
+                  f"links.new(tex.outputs['Color'], socket({inputs[pname]!r}))"]
     lines += [
         "out = next(n for n in nodes if n.type == 'OUTPUT_MATERIAL')",
         "links.new(bsdf.outputs[0], out.inputs['Surface'])",

@@ -81,6 +81,11 @@ PRINCIPLED = ModelSpec(
         _unit("alpha", 1.0, fit=False, desc="Alpha (coverage: below 1 the black background shows through)."),
     ),
     lobes=PASS_LOBES_PRINCIPLED,
+    texturable=("base_color", "metallic", "roughness", "ior", "specular_ior_level", "specular_tint", "anisotropic",
+                "anisotropic_rotation", "coat_weight", "coat_roughness", "coat_ior", "coat_tint", "sheen_weight",
+                "sheen_roughness", "sheen_tint", "diffuse_roughness", "subsurface_weight", "subsurface_radius",
+                "subsurface_scale", "subsurface_ior", "subsurface_anisotropy", "transmission_weight",
+                "thin_film_thickness", "thin_film_ior", "alpha"),
 )
 """Every reflection input of Blender 5.0's Principled BSDF but Emission (the probe measures
 reflection) and Tangent (the probe's own: along the latitudes). Past the first nine they are held
@@ -97,6 +102,7 @@ GLOSSY = ModelSpec(
         _unit("roughness", 0.3, desc="Roughness (α = roughness²)."),
     ),
     lobes={"diffuse": LobeSpec(empty=True), "specular": LobeSpec(params=("color", "roughness"))},
+    texturable=("color", "roughness"),
 )
 
 DIFFUSE = ModelSpec(
@@ -107,6 +113,7 @@ DIFFUSE = ModelSpec(
         _unit("roughness", 0.0, fit=False, desc="Oren-Nayar roughness."),
     ),
     lobes={"diffuse": LobeSpec(params=("color", "roughness")), "specular": LobeSpec(empty=True)},
+    texturable=("color", "roughness"),
 )
 
 METALLIC = ModelSpec(
@@ -121,6 +128,7 @@ METALLIC = ModelSpec(
         _unit("roughness", 0.3, desc="Roughness (α = roughness²)."),
     ),
     lobes={"diffuse": LobeSpec(empty=True), "specular": LobeSpec(params=("ior", "extinction", "roughness"))},
+    texturable=("ior", "extinction", "roughness"),
 )
 
 MODELS = {m.name: m for m in (PRINCIPLED, GLOSSY, DIFFUSE, METALLIC)}

@@ -25,3 +25,22 @@ def uv_sphere(u: int, v: int) -> tuple[np.ndarray, list[tuple[int, ...]]]:
     faces += [(at(r, c), at(r + 1, c), at(r + 1, c + 1), at(r, c + 1)) for r in range(v - 2) for c in range(u)]
     faces += [(bottom, at(v - 2, c + 1), at(v - 2, c)) for c in range(u)]
     return verts, faces
+
+
+def uv_loops(u: int, v: int) -> np.ndarray:
+    """Texture coordinates of every face corner of ``uv_sphere(u, v)``, in its face order: the
+    probe's convention (`core.textures`: u = φ / 2π about the sphere's own z, v = θ / π from its top
+    pole, an image's top row at θ = 0), in Blender's terms (its v = 0 is an image's bottom row, so
+    1 - θ / π). The seam's corners take u = 1, the poles' the middle of their face."""
+    def corner(r: int, c: int) -> tuple[float, float]:  # ring r (0 next to the top pole), column c (may be u)
+        return c / u, 1.0 - (r + 1) / v
+
+    out: list[tuple[float, float]] = []
+    for c in range(u):
+        out += [((c + 0.5) / u, 1.0), corner(0, c), corner(0, c + 1)]
+    for r in range(v - 2):
+        for c in range(u):
+            out += [corner(r, c), corner(r + 1, c), corner(r + 1, c + 1), corner(r, c + 1)]
+    for c in range(u):
+        out += [((c + 0.5) / u, 0.0), corner(v - 2, c + 1), corner(v - 2, c)]
+    return np.asarray(out, np.float32)

@@ -66,11 +66,12 @@ class ProbeSpheres:
         everything else."""
         import bpy
 
-        from brdfremap.adapters.cycles.sphere_mesh import uv_sphere
+        from brdfremap.adapters.cycles.sphere_mesh import uv_loops, uv_sphere
 
         mesh = bpy.data.meshes.new("probe-mesh")
         verts, faces = uv_sphere(SPHERE_SEGMENTS, SPHERE_SEGMENTS // 2)
         mesh.from_pydata(verts.tolist(), [], faces)
+        mesh.uv_layers.new(name="UVMap").data.foreach_set("uv", uv_loops(SPHERE_SEGMENTS, SPHERE_SEGMENTS // 2).ravel())
         mesh.shade_smooth()
         mesh.materials.append(None)
         obj = bpy.data.objects.new("probe-mesh", mesh)
@@ -82,7 +83,8 @@ class ProbeSpheres:
         self.mesh_probe = obj
 
     def use(self, mat, anisotropic: bool) -> None:
-        """The material on the probe this render needs, the other probe hidden."""
+        """The material on the probe this render needs, the other probe hidden: the mesh for an
+        anisotropic material (a tangent) or a textured one (texture coordinates)."""
         if anisotropic and self.mesh_probe is None:
             self._mesh(self.scene, self.sphere)
         if anisotropic:
@@ -258,6 +260,28 @@ class BlenderState:
             if pname in params:  # a caller naming fewer inputs (cycles-subprocess.yaml) leaves Blender's defaults
                 socket(bsdf, sock).default_value = socket_value(model, pname, params[pname])
 
+    def link_textures(self, mat, bsdf, model: str, textures: dict) -> None:
+        """An Image Texture node on each textured input (the mesh's UV map; colour space and
+        interpolation as given)."""
+        from brdfremap.adapters.cycles.material import NODES, socket
+
+        tree = mat.node_tree
+        for i, (pname, tex) in enumerate(sorted(textures.items())):
+            image = self.bpy.data.images.load(tex["file"], check_existing=False)
+            image.colorspace_settings.name = "sRGB" if tex["colorspace"] == "srgb" else "Non-Color"
+            node = tree.nodes.new("ShaderNodeTexImage")
+            node.image, node.label = image, pname
+            node.interpolation = "Closest" if tex.get("filter") == "nearest" else "Linear"
+            node.location = (-400, -300 * i)
+            tree.links.new(node.outputs["Color"], socket(bsdf, NODES[model][1][pname]))
+
+    def drop(self, mat) -> None:
+        """A material made for one request, with its images."""
+        images = [n.image for n in mat.node_tree.nodes if n.type == "TEX_IMAGE" and n.image is not None]
+        self.bpy.data.materials.remove(mat)
+        for image in images:
+            self.bpy.data.images.remove(image)
+
     def material(self, model: str, params: dict):
         if model not in self.materials:
             self.materials[model] = self.new_material(model, f"brdf-remap {model}")
@@ -269,8 +293,21 @@ class BlenderState:
     def render(self, req: dict) -> dict:
         t0 = time.perf_counter()
         self.setup_scene(req["scene"])
-        mat = self.material(req["model"], req["params"])
-        self.probes.use(mat, float(req["params"].get("anisotropic", 0.0)) > 0.0)
+        textured = req.get("textures") or {}
+        if textured:
+            mat, bsdf = self.new_material(req["model"], "brdf-remap textured")
+            self.set_values(bsdf, req["model"], req["params"])
+            self.link_textures(mat, bsdf, req["model"], textured)
+        else:
+            mat = self.material(req["model"], req["params"])
+        self.probes.use(mat, bool(textured) or float(req["params"].get("anisotropic", 0.0)) > 0.0)
+        try:
+            return self._render(req, t0)
+        finally:
+            if textured:
+                self.drop(mat)
+
+    def _render(self, req: dict, t0: float) -> dict:
         scene = self.bpy.context.scene
         scene.render.filepath = req["out"]
         # The lobe passes only when a lobe is asked for: accumulating them costs about 13 % of a
@@ -287,9 +324,18 @@ class BlenderState:
         return {"seconds": time.perf_counter() - t0}
 
     def save_blend(self, req: dict) -> dict:
-        mat = self.material(req["model"], req["params"])
-        mat.name = req.get("name", mat.name)
-        self.bpy.data.libraries.write(req["path"], {mat}, fake_user=True)
+        textures = req.get("textures") or {}
+        if not textures:
+            mat = self.material(req["model"], req["params"])
+            mat.name = req.get("name", mat.name)
+            self.bpy.data.libraries.write(req["path"], {mat}, fake_user=True)
+            return {}
+        mat, bsdf = self.new_material(req["model"], req.get("name", "brdf-remap"))
+        self.set_values(bsdf, req["model"], req["params"])
+        self.link_textures(mat, bsdf, req["model"], textures)
+        # Image paths relative to the .blend ("//name.png"): the textures travel with it.
+        self.bpy.data.libraries.write(req["path"], {mat}, fake_user=True, path_remap="RELATIVE")
+        self.drop(mat)
         return {}
 
     def save_library(self, req: dict) -> dict:
@@ -299,11 +345,12 @@ class BlenderState:
         for item in req["items"]:
             mat, bsdf = self.new_material(item["model"], item["name"])
             self.set_values(bsdf, item["model"], item["params"])
+            self.link_textures(mat, bsdf, item["model"], item.get("textures") or {})
             mats.add(mat)
             names.append(mat.name)
-        self.bpy.data.libraries.write(req["path"], mats, fake_user=True)
+        self.bpy.data.libraries.write(req["path"], mats, fake_user=True, path_remap="RELATIVE")
         for mat in mats:
-            self.bpy.data.materials.remove(mat)
+            self.drop(mat)
         return {"names": names}
 
     def read_blend(self, req: dict) -> dict:

@@ -23,6 +23,7 @@ from brdfremap.core.errors import ConfigError, RenderError
 from brdfremap.core.protocol import Adapter, ModelChoice
 from brdfremap.core.scene import PointLight, ProbeScene
 from brdfremap.core.schemas import Value
+from brdfremap.core.textures import Texture, TextureMap
 
 from . import appearance as _appearance
 from .appearance import EXT_IOR
@@ -210,9 +211,29 @@ only without `spec_trans`: Mitsuba nests no transmissive BSDF there) (Blender's 
 MaterialX's surfaces are two-sided; the probe sees front faces only, so the fit is the same)."""
 
 
-def bsdf_xml(model: str, p: dict[str, Value], two_sided: bool = True) -> str:
-    """The material as a Mitsuba 3 XML ``<bsdf>`` element; an opaque one inside a ``twosided``."""
+def bitmap_file(tex: Texture) -> dict[str, Any]:
+    """A texture file as Mitsuba's `bitmap`: an sRGB-encoded one decoded (raw false), a data map read as
+    it is (raw true)."""
+    return {"type": "bitmap", "filename": tex.file, "raw": tex.colorspace == "linear",
+            "filter_type": "nearest" if tex.filter == "nearest" else "bilinear"}
+
+
+def textured_dict(model: str, p: dict[str, Value], textures: dict[str, dict[str, Any]]) -> dict[str, Any]:
+    """The BSDF dictionary with these parameters' properties replaced by textures (each a
+    property of the model's own name: `texturable` lists only those)."""
     d = bsdf_dict(model, p)
+    for name, tex in textures.items():
+        if name not in d:
+            raise ConfigError(f"mitsuba {model}: {name} is not a texture input")
+        d[name] = tex
+    return d
+
+
+def bsdf_xml(model: str, p: dict[str, Value], two_sided: bool = True,
+             textures: dict[str, Texture] | None = None) -> str:
+    """The material as a Mitsuba 3 XML ``<bsdf>`` element; an opaque one inside a ``twosided``;
+    ``textures`` as `bitmap` textures of their (relative) file names."""
+    d = textured_dict(model, p, {k: bitmap_file(t) for k, t in (textures or {}).items()})
     if two_sided and model in ONE_SIDED and not float(p.get("spec_trans", 0.0)) > 0.0:  # type: ignore[arg-type]
         d = {"type": "twosided", "bsdf": d}
     return "\n".join(_xml_element(d, None, "")) + "\n"
@@ -220,7 +241,8 @@ def bsdf_xml(model: str, p: dict[str, Value], two_sided: bool = True) -> str:
 
 def _xml_element(d: dict[str, Any], name: str | None, indent: str) -> list[str]:
     named = f" name={quoteattr(name)}" if name else ""
-    lines = [f"{indent}<bsdf type={quoteattr(d['type'])}{named}>"]
+    tag = "texture" if d["type"] == "bitmap" else "bsdf"
+    lines = [f"{indent}<{tag} type={quoteattr(d['type'])}{named}>"]
     inner = indent + "    "
     for key, v in d.items():
         if key == "type":
@@ -235,7 +257,7 @@ def _xml_element(d: dict[str, Any], name: str | None, indent: str) -> list[str]:
             lines.append(f'{inner}<string name="{key}" value={quoteattr(v)}/>')
         else:
             lines.append(f'{inner}<float name="{key}" value="{v:.6g}"/>')
-    lines.append(f"{indent}</bsdf>")
+    lines.append(f"{indent}</{tag}>")
     return lines
 
 
@@ -268,6 +290,7 @@ class MitsubaAdapter(Adapter):
     models = MODELS
     light_types = frozenset({"point", "environment"})
     calibration = ("diffuse", {"reflectance": 0.8})
+    textures = True
     max_scenes = 8
 
     @classmethod
@@ -384,6 +407,24 @@ class MitsubaAdapter(Adapter):
             raise RenderError(f"mitsuba render failed ({model}, {params}): {exc}") from exc
         return np.array(img, dtype=np.float32)[..., :3]
 
+    def render_textured(self, model: str, params: dict[str, Value], maps: dict[str, TextureMap],
+                        scene: ProbeScene) -> np.ndarray:
+        """A scene of its own with `bitmap` textures of the values as they are (raw); not cached."""
+        mi = self.mi
+        bitmaps = {name: {"type": "bitmap", "raw": True, "wrap_mode": "repeat",
+                          "filter_type": "nearest" if m.filter == "nearest" else "bilinear",
+                          "bitmap": mi.Bitmap(np.ascontiguousarray(
+                              m.values[..., None] if m.values.ndim == 2 else m.values, dtype=np.float32))}
+                   for name, m in maps.items()}
+        doc = self.scene_dict(model, params, scene)
+        doc["probe"]["bsdf"] = textured_dict(model, params, bitmaps)
+        try:
+            img = mi.render(mi.load_dict(doc), seed=scene.seed, spp=scene.spp)
+        except Exception as exc:
+            _reraise_interrupt(exc)
+            raise RenderError(f"mitsuba textured render failed ({model}, textures {sorted(maps)}): {exc}") from exc
+        return np.array(img, dtype=np.float32)[..., :3]
+
     def derived(self, model: str, params: dict[str, Value]) -> dict[str, Value]:
         p = params
         if model in ("roughconductor", "conductor", "ashikhmin_shirley"):
@@ -416,10 +457,11 @@ class MitsubaAdapter(Adapter):
     def notes(self, model: str, params: dict[str, Value]) -> list[str]:
         return energy_notes(model, params)
 
-    def write_native(self, model: str, params: dict[str, Value], out_dir: Path) -> list[Path]:
+    def write_native(self, model: str, params: dict[str, Value], out_dir: Path,
+                     textures: dict[str, Texture] | None = None) -> list[Path]:
         text = f"<!-- brdf-remap: Mitsuba 3 {model} -->\n"
         if model in ("ward", "phong", "ashikhmin_shirley", "ashikhmin_shirley_plastic"):
             text += ("<!-- a Python plugin: call brdfremap.adapters.mitsuba.register_bsdfs() after "
                      "mitsuba.set_variant() before loading -->\n")
-        text += bsdf_xml(model, params)
+        text += bsdf_xml(model, params, textures=textures)
         return [write_text_atomic(Path(out_dir) / "material.xml", text)]

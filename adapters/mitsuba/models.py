@@ -70,6 +70,7 @@ ROUGHCONDUCTOR = ModelSpec(
         "diffuse": LobeSpec(empty=True),
         "specular": LobeSpec(params=("alpha", "alpha_u", "alpha_v", "eta", "k", "specular_reflectance")),
     },
+    texturable=("eta", "k", "alpha", "alpha_u", "alpha_v", "specular_reflectance"),
 )
 
 CONDUCTOR = ModelSpec(
@@ -80,6 +81,7 @@ CONDUCTOR = ModelSpec(
     smooth=True,
     parameters=(CONDUCTOR_PRESET, ETA, K, SPEC_REFL),
     lobes={"diffuse": LobeSpec(empty=True), "specular": LobeSpec(params=("eta", "k", "specular_reflectance"))},
+    texturable=("eta", "k", "specular_reflectance"),
 )
 
 ROUGHPLASTIC = ModelSpec(
@@ -94,6 +96,7 @@ ROUGHPLASTIC = ModelSpec(
         SPEC_REFL,
     ),
     lobes=_lobes("alpha", "int_ior", "specular_reflectance"),
+    texturable=("diffuse_reflectance", "specular_reflectance"),  # Mitsuba 3 takes alpha and int_ior as numbers only
 )
 
 DIFFUSE = ModelSpec(
@@ -102,6 +105,7 @@ DIFFUSE = ModelSpec(
     parameters=(ParamSpec(name="reflectance", kind="rgb", default=(0.5, 0.5, 0.5), linear_in=("full", "diffuse"),
                           description="Albedo."),),
     lobes={"diffuse": LobeSpec(params=("reflectance",)), "specular": LobeSpec(empty=True)},
+    texturable=("reflectance",),
 )
 
 
@@ -113,6 +117,7 @@ PLASTIC = ModelSpec(
     smooth=True,
     parameters=(BASE_COLOUR, INT_IOR, SPEC_REFL),
     lobes=_lobes("int_ior", "specular_reflectance"),
+    texturable=("diffuse_reflectance", "specular_reflectance"),
 )
 
 SPEC_TRANS = ParamSpec(name="specular_transmittance", kind="rgb", default=(1.0, 1.0, 1.0), fit=False,
@@ -178,6 +183,9 @@ PRINCIPLED = ModelSpec(
         _unit("flatness", 0.0, fit=False, desc="Flatness: the diffuse lobe blended towards Hanrahan-Krueger's "
               "subsurface approximation (Disney)."),
     ),
+    # Mitsuba 3 takes every input as an image but specular (and eta, which it replaces).
+    texturable=("base_color", "metallic", "roughness", "spec_tint", "anisotropic", "sheen", "sheen_tint", "clearcoat",
+                "clearcoat_gloss", "spec_trans", "flatness"),
 )
 
 # --- Mitsuba 0.5's models, as the Python plugins of bsdfs.py ------------------------------------

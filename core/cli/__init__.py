@@ -13,11 +13,11 @@ from .. import interrupt
 from ..errors import ConfigError, RemapError
 
 EXIT_USAGE = 2
-COMMANDS = ("convert", "render", "sweep", "roundtrip", "schema", "adapters", "check")
+COMMANDS = ("convert", "table", "render", "sweep", "roundtrip", "schema", "adapters", "check")
 
 
 def _dispatch(argv: list[str]) -> int:
-    from . import check_cmd, convert_cmd, experiment_cmd, remap_cmd, tools
+    from . import check_cmd, convert_cmd, experiment_cmd, remap_cmd, table_cmd, tools
 
     head, rest = (argv[0], argv[1:]) if argv else ("", [])
     if head and not head.startswith("-") and head not in COMMANDS:
@@ -31,6 +31,8 @@ def _dispatch(argv: list[str]) -> int:
         return check_cmd.run(check_cmd.parser().parse_args(rest))
     if head == "render":
         return tools.render(tools.render_parser().parse_args(rest))
+    if head == "table":
+        return table_cmd.run(rest)
     if head == "convert":
         return convert_cmd.run(convert_cmd.parser().parse_args(rest))
     if head in ("sweep", "roundtrip"):

@@ -44,11 +44,12 @@ def add_settings(p: argparse.ArgumentParser) -> None:
         g.add_argument(flag(name), **kw)
 
 
-def settings_from(args: argparse.Namespace) -> Settings:
+def settings_from(args: argparse.Namespace, base: Settings = DEFAULTS) -> Settings:
+    """The settings the flags give, the others as in ``base``."""
     given = {name: getattr(args, f"settings_{name}") for name in Settings.model_fields
              if getattr(args, f"settings_{name}", None) is not None}
     try:
-        return Settings(**given)
+        return Settings(**{**base.model_dump(), **given})
     except ValidationError as exc:
         field, msg = validation_message(exc)
         raise ConfigError(msg, field=flag(field)) from None
@@ -62,8 +63,9 @@ def add_scene(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, metavar="N", help="override the scene's sampler seed")
 
 
-def scene_from(args: argparse.Namespace) -> ProbeScene:
-    scene = load_scene(args.scene) if args.scene else ProbeScene()
+def scene_from(args: argparse.Namespace, base: ProbeScene | None = None) -> ProbeScene:
+    """The scene the flags give (`--scene`, else ``base``, else the built-in probe), overridden."""
+    scene = load_scene(args.scene) if args.scene else (base or ProbeScene())
     try:
         return scene.overridden(resolution=args.resolution, spp=args.spp, seed=args.seed)
     except ValidationError as exc:

@@ -42,11 +42,16 @@ def parser() -> argparse.ArgumentParser:
         epilog=USAGE_EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("--adapter", required=True, help="target adapter (see `remap adapters`), or a renderer "
-                                                    "definition file (renderer.yaml)")
-    p.add_argument("--model", required=True, help="target material model of that adapter")
+    p.add_argument("--adapter", help="target adapter (see `remap adapters`), or a renderer definition file "
+                                     "(renderer.yaml); required unless --table gives it")
+    p.add_argument("--model", help="target material model of that adapter; required unless --table gives it")
     p.add_argument("--source", required=True, metavar="MATERIAL.yaml", help="source material file")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    p.add_argument("--table", metavar="TABLE", help="read the target's parameters from a remap table (`remap table "
+                                                    "build`) instead of fitting them: rendered and judged, or not "
+                                                    "rendered with --no-render")
+    p.add_argument("--no-render", action="store_true", help="with --table: no render at all; write the "
+                                                            "parameters and the native material")
     options.add_scene(p)
     p.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE",
                    help="hold a target parameter at a value (repeatable), e.g. --fix distribution=ggx")
@@ -57,6 +62,15 @@ def parser() -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.table:
+        from .table_cmd import lookup
+
+        return lookup(args)
+    for flag in ("adapter", "model"):
+        if getattr(args, flag) is None:
+            raise ConfigError("is required (the target's; or --table TABLE, which names it)", field=f"--{flag}")
+    if args.no_render:
+        raise ConfigError("goes with --table (a fit renders)", field="--no-render")
     from ..execute import adapter_pool
     from ..executors import workers
     from ..job import Job, Target, Where, model_of, resolve
@@ -90,11 +104,11 @@ def run(args: argparse.Namespace) -> int:
         (done,) = runner.run([Task("", resolved.job, str(args.source))])
     if done.redone and not args.quiet:
         print(f"note: the result that was in {folder} was replaced: {done.redone}", file=sys.stderr)
-    _print(done.report, folder, resumed=done.resumed)
+    print_report(done.report, folder, resumed=done.resumed)
     return 0
 
 
-def _params(params: dict, names: list[str] | None = None) -> str:
+def format_params(params: dict, names: list[str] | None = None) -> str:
     return " ".join(f"{k}={format_value(tuple(v) if isinstance(v, list) else v)}" for k, v in params.items()
                     if names is None or k in names)
 
@@ -131,16 +145,25 @@ def _verdict(r: Report) -> str:
             f"{', '.join(unresolved)} cannot resolve this material (render noise over {limit:.0%})")
 
 
-def _print(r: Report, folder, resumed: bool) -> None:
+def _start(r: Report) -> tuple[str, str]:
+    lk = r.job.lookup
+    if lk is not None:
+        expected = f"; direct fits here reach about {lk.expected_error:.1%}" if lk.expected_error is not None else ""
+        return "table", f"{lk.table} ({lk.method} map): nothing fitted{expected}" + (
+            f"; clamped: {'; '.join(lk.outside)}" if lk.outside else "")
+    return "start", ("the exporters' conversion: " + format_params(r.start.params) if r.start.informed
+                     else "the target's defaults")
+
+
+def print_report(r: Report, folder, resumed: bool) -> None:
     m = r.metrics
     rows = [
-        ("params", _params(r.params)),
+        ("params", format_params(r.params)),
         ("relative RMSE", f"{m.relative_rmse:.2%}   (noise floor {m.noise_floor:.2%})"),
         ("perceptual", f"{m.perceptual:.2f} mean ΔE_ITP"),
         *([("fit scene", r.fit_scene.why)] if r.fit_scene else []),
         ("held-out", _held_out(r)),
-        ("start", "the exporters' conversion: " + _params(r.start.params) if r.start.informed
-                  else "the target's defaults"),
+        _start(r),
         ("renders", f"{r.renders} target ({', '.join(f'{v} at {k}' for k, v in r.renders_by_resolution.items())})"
                     f" + {r.source_renders} source"),
         ("seconds", f"{r.seconds:.2f}" + ("   (the stored result of this same job: --force to fit again)"

@@ -67,7 +67,7 @@ def adapters(args: argparse.Namespace) -> int:
 def schema_parser() -> argparse.ArgumentParser:
     p = options.Parser(prog="remap schema", description="Print the JSON Schema of one of the file formats "
                                 "(result.json by default), to validate what you read or write.")
-    p.add_argument("name", nargs="?", default="report", help="report (result.json), material, scene, experiment, "
+    p.add_argument("name", nargs="?", default="report", help="report (result.json), material, scene, experiment, table-spec, table, "
                                                              "job, settings, or one a plugin adds (renderer)")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     return p
@@ -79,7 +79,7 @@ def schema(args: argparse.Namespace) -> int:
     known = collect_schemas()
     if args.name not in known:
         raise ConfigError(f"unknown file format {args.name!r} (known: {', '.join(sorted(known))})", field="NAME")
-    mode = "serialization" if args.name == "report" else "validation"
+    mode = "serialization" if args.name in ("report", "table") else "validation"
     doc = known[args.name].model_json_schema(mode=mode)
     doc = {"$schema": "https://json-schema.org/draft/2020-12/schema", **doc}
     print(json.dumps(doc, indent=2, ensure_ascii=False))

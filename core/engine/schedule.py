@@ -96,12 +96,15 @@ class _State:
 
 def remap(target: ModelSpec, base: dict[str, Value], free: list[str], renders: Renders,
           settings: Settings = Settings(), tuning: Tuning = Tuning(),
-          progress: ProgressFn | None = None, alternatives: list[dict[str, Value]] = ()) -> EngineResult:
+          progress: ProgressFn | None = None, alternatives: list[dict[str, Value]] = (),
+          notes: list = ()) -> EngineResult:
     """Fit ``free`` parameters of ``target`` (the others as in ``base``) so that the target's render
     matches the source's, both as ``renders`` gives them at its scene. ``alternatives``: values of
-    discrete choices to try first (each fitted briefly, the best kept)."""
+    discrete choices to try first (each fitted briefly, the best kept). ``notes``: findings the
+    caller adds to the verdict (where the parameters came from)."""
     t0 = time.perf_counter()
     run = _setup(target, free, renders, settings, tuning, progress)
+    run.notes += list(notes)
     base = _choose(run, dict(base), list(alternatives))
     plan = plan_stages(settings.scheme, target, free, run.scene.source_lobes)
     run.notes += plan.findings

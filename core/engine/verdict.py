@@ -19,6 +19,7 @@ from ..findings import (
     NotAtMinimum,
     NothingFitted,
     PinnedOnBound,
+    TableLookup,
     RendererAlters,
     ValidationSkipped,
     Verdict,
@@ -118,7 +119,7 @@ def judge(ev: Evidence, notes: list) -> Verdict:
                   if p is scene[0] else p for p in errors]
     problems = errors + fit + [RendererAlters(detail=n) for n in ev.renderer_notes]
     extra: list = [ValidationSkipped(condition=k, why=v) for k, v in ev.validation.skipped.items()]
-    if not ev.fitted:
+    if not ev.fitted and not any(isinstance(n, TableLookup) for n in notes):
         extra.append(NothingFitted())
     elif ev.assessment.dead and not ev.assessment.no_effect:
         extra.append(DeadParameters(parameters=list(ev.assessment.dead)))

@@ -1,0 +1,154 @@
+"""`remap table build SPEC.yaml --out TABLE` (a remap table over a model pair), `remap table show
+TABLE`, and `remap --table TABLE --source MATERIAL.yaml --out DIR` (an instant remap through one)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+from ..errors import ConfigError
+from . import options
+
+ACTIONS = ("build", "show")
+
+
+def parser(action: str) -> argparse.ArgumentParser:
+    if action == "build":
+        p = options.Parser(prog="remap table build", description="Fit a grid of source materials over the axes "
+                           "of SPEC.yaml (and a few held-out ones), learn a smooth map from source to target "
+                           "parameters, and write TABLE/table.json. An interrupted build resumes.")
+        p.add_argument("spec", metavar="SPEC.yaml", help="table spec (see configs/tables/)")
+        p.add_argument("--out", required=True, metavar="TABLE", help="output folder (created)")
+        options.add_workers(p)
+    else:
+        p = options.Parser(prog="remap table show", description="What a table holds: its pair, grid, fits and "
+                           "how each candidate map did on held-out materials.")
+        p.add_argument("table", metavar="TABLE", help="a table's folder or its table.json")
+    options.add_common(p)
+    return p
+
+
+def run(argv: list[str]) -> int:
+    if not argv or argv[0] not in ACTIONS:
+        got = f"got {argv[0]!r}" if argv else "got nothing"
+        raise ConfigError(f"expected one of: {', '.join(ACTIONS)} ({got}; e.g. `remap table build SPEC.yaml --out "
+                          "DIR`)", field="remap table")
+    args = parser(argv[0]).parse_args(argv[1:])
+    return build(args) if argv[0] == "build" else show(args)
+
+
+def build(args: argparse.Namespace) -> int:
+    from ..execute import adapter_pool
+    from ..executors import workers
+    from ..plugins import collect_adapters
+    from ..tables import load_table_spec
+    from ..tables.build import build_table
+
+    spec = load_table_spec(args.spec)
+    registry = collect_adapters()
+    with workers(args.jobs, args.scheduler) as w, adapter_pool(registry):
+        table = build_table(spec, args.spec, args.out, registry, w, quiet=args.quiet)
+    _summary(table)
+    print(f"wrote          {args.out}/table.json, {args.out}/points.csv")
+    return 0
+
+
+def show(args: argparse.Namespace) -> int:
+    from ..tables import read_table
+
+    _summary(read_table(args.table))
+    return 0
+
+
+def _summary(t) -> None:
+    s, b = t.spec, t.build
+    axes = " x ".join(f"{n} {a.steps}" + (" per channel" if a.mode == "channels" and t.source_kinds[n] == "rgb"
+                                            else "") for n, a in s.axes.items())
+    print(f"table          {t.name}: {s.source.adapter}:{s.source.model} -> {s.target.adapter}:{s.target.model}")
+    print(f"grid           {axes} = {b.points} points; mapped: "
+          f"{', '.join(dict.fromkeys(o.param for o in t.outputs if o.kind != 'error'))}")
+    print(f"fits           {b.used} used, {b.flagged} flagged unreliable, {b.left_out} left out of the regression "
+          "(their fit itself in question)")
+    print(f"cost           {b.renders} target renders, {b.seconds:.0f} s of fits; this build {b.wall_seconds:.1f} s "
+          f"in {b.ran_in}")
+    for m, c in t.candidates.items():
+        cv = max((v for k, v in c.cv_rms.items() if k != "error"), default=float("nan"))
+        held = (f"held-out lookup/fit error: median {c.median_ratio:.3f}, 95th percentile {c.p95_ratio:.3f}"
+                if c.median_ratio is not None else "no held-out lookups")
+        mark = "*" if m == t.chosen else " "
+        print(f"  {mark} {m:<12} worst cross-validated error {cv:.3f} of a range; {held}")
+    print(f"chosen         {t.chosen}: {t.chosen_why}")
+
+
+def lookup(args: argparse.Namespace) -> int:
+    """`remap --table T --source M --out DIR`: the target's parameters from the table's map; rendered
+    and judged as a fit is (or not at all with --no-render)."""
+    from ..execute import adapter_pool
+    from ..executors import workers
+    from ..job import Job, Where, model_of, resolve
+    from ..plugins import collect_adapters
+    from ..runner import Runner, Task
+    from ..schemas import load_material
+    from ..store import Store, owned
+    from ..tables import TableMap, read_table
+    from ..tables.lookup import axis_values, look_up, write_answer
+    from .remap_cmd import print_report
+
+    t0 = time.perf_counter()
+    table = read_table(args.table)
+    source = load_material(args.source)
+    registry = collect_adapters()
+    tgt = table.spec.target
+    for flag, given, want in (("--adapter", args.adapter, tgt.adapter), ("--model", args.model, tgt.model)):
+        if given is not None and given != want:
+            raise ConfigError(f"the table maps to {tgt.adapter}:{tgt.model}; leave it out or give {want}", field=flag)
+    src_spec = model_of(registry, source.adapter, source.model, str(args.source), "")
+    values = axis_values(table, source, src_spec, str(args.source))
+    tmap = TableMap(table)
+    loaded = time.perf_counter() - t0
+    answer = look_up(table, tmap, values)
+    job = Job(source=source, target=tgt, scene=options.scene_from(args, table.spec.scene.scene(_here(args.table))),
+              settings=options.settings_from(args, table.spec.options), label=str(args.source), lookup=answer.lookup)
+    resolved = resolve(job, registry, Where(source_file=str(args.source)))
+    header = (f"remap {source.adapter}:{source.model} -> {tgt.adapter}:{tgt.model} through the table {table.name!r} "
+              f"({tmap.method} map): looked up in {answer.seconds * 1e3:.3f} ms (the table read in "
+              f"{loaded * 1e3:.0f} ms)")
+    if args.no_render:
+        with owned(args.out) as folder, adapter_pool(registry) as adapters:
+            files = write_answer(folder, resolved, answer, adapters[tgt.adapter], str(args.table))
+        if not args.quiet:
+            print(header, file=sys.stderr)
+        _print_answer(resolved, answer, folder, files)
+        return 0
+    with owned(args.out) as folder, workers() as w, adapter_pool(registry):
+        from .progress import RenderProgress
+
+        runner = Runner(Store(folder), w, renderer_files=tuple(registry.loaded_files()), quiet=True,
+                        render_progress=RenderProgress(not args.quiet, header), reuse=not args.force)
+        (done,) = runner.run([Task("", resolved.job, str(args.source))])
+    print_report(done.report, folder, resumed=done.resumed)
+    return 0
+
+
+def _here(table_arg: str):
+    from pathlib import Path
+
+    p = Path(table_arg)
+    return (p if p.is_dir() else p.parent).resolve()
+
+
+def _print_answer(resolved, answer, folder, files) -> None:
+    from .remap_cmd import format_params
+
+    lk = answer.lookup
+    spec = resolved.target_spec
+    rows = [("params", format_params(spec.active(resolved.base))),
+            ("expected", f"direct fits about these source values reach about {lk.expected_error:.2%} (the "
+                         "table's grid); not rendered (--no-render)"),
+            *([("outside", "; ".join(lk.outside) + ": clamped")] if lk.outside else []),
+            ("lookup", f"{answer.seconds * 1e3:.3f} ms"),
+            ("wrote", f"{folder}/ ({', '.join(p.name for p in files)})")]
+    width = max(len(k) for k, _ in rows)
+    for k, v in rows:
+        print(f"{k:<{width}}  {v}")

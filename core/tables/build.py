@@ -1,0 +1,298 @@
+"""`remap table build`: fit every grid point and every held-out material (ordinary remap jobs
+through the store and the runner: resumable, `--jobs`, Dask), fit the candidate maps to the grid,
+look up the held-out materials with each map and render the lookups, keep the map whose lookups
+come closest to the direct fits, and write the table.
+
+The output folder holds `points/<id>/` (each grid fit), `holdout/<id>/` (each held-out fit),
+`checks/<method>/<id>/` (each map's lookup of a held-out material, rendered and judged),
+`table.json`, and `points.csv` (every fit in a row). Rerun after an interruption and only what
+is missing runs."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..atomic import write_text_atomic
+from ..errors import ConfigError
+from ..executors import Workers
+from ..job import Job, Lookup, Where, model_of, resolve
+from ..plugins import AdapterRegistry
+from ..runner import Done, Runner, Task
+from ..schemas import Material, ModelSpec
+from ..store import Store, owned
+from .maps import METHODS, choose_hyperparameter
+from .spec import Layout, TableSpec
+from .table import (TABLE_SCHEMA_VERSION, BuildRecord, Candidate, PointRecord, Table, TableMap, grid_of,
+                    outputs_for, write_table)
+
+QUESTIONED = frozenset({"not_at_minimum", "cannot_resolve", "image_precision", "renderer_alters", "no_effect"})
+"""Findings that put the fit itself in question (it may not be the best this target does): such a
+point is left out of the regression. A mismatch, a held-out light over the threshold, a bound the
+fit presses on, parameters that trade off: the fit is still the closest the target gets, and kept."""
+PREFERENCE = ("polynomial", "rbf", "multilinear")
+"""Order among maps that do equally well: the smoothest first."""
+
+
+@dataclass
+class Plan:
+    """A spec checked against the installed adapters: its layout and the jobs of its points."""
+
+    spec: TableSpec
+    file: str
+    layout: Layout
+    source_spec: ModelSpec
+    target_spec: ModelSpec
+    source_params: dict
+    grid: list[tuple[tuple[int, ...], dict]]
+    held: list[dict]
+
+
+def plan(spec: TableSpec, file: str, registry: AdapterRegistry) -> Plan:
+    """Every check before any render: axes are continuous parameters of the source within its
+    bounds, the target's discrete choices are held, and every point's job resolves."""
+    src = model_of(registry, spec.source.adapter, spec.source.model, file, "source.")
+    tgt = model_of(registry, spec.target.adapter, spec.target.model, file, "target.")
+    params = src.complete(spec.source.params, file=file, prefix="source.params")
+    kinds = {}
+    for name, ax in spec.axes.items():
+        kinds[name] = _axis_kind(src, name, ax, params, file)
+    same = (spec.source.adapter, spec.source.model) == (spec.target.adapter, spec.target.model)
+    for p in tgt.parameters:
+        if p.kind == "choice" and p.explore and not same and p.name not in spec.target.fix:
+            raise ConfigError(f"the fit would try each {p.name} and keep the best, point by point, and a map cannot "
+                              f"follow a choice: hold it (target.fix.{p.name}: one of {', '.join(p.choices)})",
+                              file=file, field="target.fix")
+    layout = Layout(spec.axes, kinds)
+    return Plan(spec, file, layout, src, tgt, {k: v for k, v in params.items() if k not in spec.axes},
+                layout.grid(), layout.draw(spec.holdout, spec.seed))
+
+
+def _axis_kind(src: ModelSpec, name: str, ax, params: dict, file: str) -> str:
+    field = f"axes.{name}"
+    if name not in src.names:
+        raise ConfigError(f"model {src.name!r} has no parameter {name!r} (known: {', '.join(src.names)})", file=file,
+                          field=field)
+    p = src.param(name)
+    if p.kind == "choice":
+        raise ConfigError(f"{name} is a choice ({', '.join(p.choices)}): an axis is a continuous parameter; give "
+                          "the choice in source.params (a table per value)", file=file, field=field)
+    if not src.is_active(name, params):
+        raise ConfigError(f"{name} does nothing with {', '.join(f'{k}={params[k]}' for k in p.active_when)}",
+                          file=file, field=field)
+    lo, hi = ax.range
+    if lo < p.lower or hi > p.upper:
+        raise ConfigError(f"range [{lo:g}, {hi:g}] goes outside {name}'s bounds [{p.lower:g}, {p.upper:g}]",
+                          file=file, field=f"{field}.range")
+    if p.kind == "scalar" and ax.mode == "channels":
+        raise ConfigError("mode channels is for an RGB parameter", file=file, field=f"{field}.mode")
+    if p.kind == "rgb" and ax.mode == "scale" and not p.separable:
+        raise ConfigError(f"{name}'s channels do not act alone in the image, so a grey sample cannot stand for a "
+                          "colour: use mode: channels", file=file, field=f"{field}.mode")
+    return p.kind
+
+
+def _material(p: Plan, values: dict, name: str) -> Material:
+    return Material(adapter=p.spec.source.adapter, model=p.spec.source.model,
+                    params={**p.spec.source.params, **values}, name=name)
+
+
+def _task(p: Plan, registry: AdapterRegistry, slot: str, values: dict, title: str, scene, settings,
+          lookup: Lookup | None = None) -> Task:
+    job = Job(source=_material(p, values, slot), target=p.spec.target, scene=scene, settings=settings,
+              label=f"{p.file} {slot}", lookup=lookup)
+    where = Where(source_file=p.file, source_prefix="source.", params_prefix=f"{slot} ({_shown(values)})",
+                  target_file=p.file, target_prefix="target.", fix_prefix="target.fix")
+    return Task(slot, resolve(job, registry, where).job, title)
+
+
+def _shown(values: dict) -> str:
+    return ", ".join(f"{k}=" + ("[" + ",".join(f"{x:.3g}" for x in v) + "]" if isinstance(v, list) else f"{v:.4g}")
+                     for k, v in values.items())
+
+
+def record(point_id: str, values: dict, done: Done, index: tuple[int, ...] = ()) -> PointRecord:
+    """What the table keeps of one fit, and whether the map may use it."""
+    r = done.report
+    if r is None:
+        return PointRecord(id=point_id, index=list(index), values=values, params=None, error=None, verdict="failed",
+                           reason=done.error, used=False, left_out=f"the fit failed: {done.error}")
+    kinds = [f.kind for f in r.findings if f.severity == "unreliable"]
+    questioned = [f.message for f in r.findings if f.severity == "unreliable" and f.kind in QUESTIONED]
+    return PointRecord(id=point_id, index=list(index), values=values, params=dict(r.params),
+                       error=r.metrics.relative_rmse, noise_floor=r.metrics.noise_floor, verdict=r.verdict,
+                       reason="" if r.reliable else r.reason, findings=kinds, used=not questioned,
+                       left_out="; ".join(questioned), renders=r.renders, seconds=r.seconds, key=r.key)
+
+
+def _mapped(p: Plan, points: list[PointRecord], done: list[Done]) -> list[str]:
+    """The target parameters the fits varied (in the model's order)."""
+    fitted = {n for d in done if d.report is not None for n in d.report.fitted}
+    return [n for n in p.target_spec.names if n in fitted]
+
+
+def fit_candidates(draft: Table) -> dict[str, Candidate]:
+    out = {}
+    for method in METHODS:
+        hyper, cv = {}, {}
+        for o in draft.outputs:
+            h, err = choose_hyperparameter(method, grid_of(draft, o))
+            hyper[o.label], cv[o.label] = h, err
+        out[method] = Candidate(method=method, hyper=hyper, cv_rms=cv)
+    return out
+
+
+def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRegistry, workers: Workers, *,
+                quiet: bool = False) -> Table:
+    from .. import __version__
+
+    t0 = time.perf_counter()
+    p = plan(spec, file, registry)
+    scene = spec.scene.scene(Path(file).resolve().parent)
+    grid_tasks = [_task(p, registry, f"points/g{i:04d}", v, f"g{i:04d} {_shown(v)}", scene, spec.options)
+                  for i, (_, v) in enumerate(p.grid)]
+    held_tasks = [_task(p, registry, f"holdout/h{i:03d}", v, f"h{i:03d} {_shown(v)}", scene, spec.options)
+                  for i, v in enumerate(p.held)]
+    with owned(out) as folder:
+        runner = Runner(Store(folder), workers, renderer_files=tuple(registry.loaded_files()), quiet=quiet,
+                        stop_on_error=False, line=_line)
+        done = runner.run(grid_tasks + held_tasks)
+        grid_done, held_done = done[:len(grid_tasks)], done[len(grid_tasks):]
+        points = [record(t.slot.split("/")[1], v, d, idx) for t, (idx, v), d in zip(grid_tasks, p.grid, grid_done)]
+        if not any(pt.used for pt in points):
+            raise ConfigError("no grid point gave a fit the map can use (see points.csv): nothing to build a map "
+                              "from", file=file)
+        held = [record(t.slot.split("/")[1], v, d) for t, v, d in zip(held_tasks, p.held, held_done)]
+        names = _mapped(p, points, grid_done)
+        first = next(d.report for d, pt in zip(grid_done, points) if pt.used)
+        draft = Table(schema_version=TABLE_SCHEMA_VERSION, tool=f"brdf-remap {__version__}",
+                      name=spec.name or Path(file).stem, spec=spec, source_kinds=p.layout.kinds,
+                      source_params=p.source_params, target_params=p.target_spec.complete(first.params),
+                      versions=first.job.versions, outputs=outputs_for(p.target_spec, names, p.layout.separable),
+                      points=points, holdout=held, candidates={}, chosen="", chosen_why="",
+                      build=BuildRecord(points=0, used=0, flagged=0, left_out=0, holdout=0, renders=0, seconds=0,
+                                        wall_seconds=0, ran_in=""))
+        draft = draft.model_copy(update={"candidates": fit_candidates(draft)})
+        candidates = _check_holdout(p, registry, runner, draft, scene)
+        chosen, why = choose(candidates)
+        table = draft.model_copy(update={
+            "candidates": candidates, "chosen": chosen, "chosen_why": why,
+            "build": BuildRecord(points=len(points), used=sum(pt.used for pt in points),
+                                 flagged=sum(pt.verdict in ("unreliable", "failed") for pt in points),
+                                 left_out=sum(not pt.used for pt in points), holdout=len(held),
+                                 renders=sum(pt.renders for pt in points + held) + runner_renders(folder),
+                                 seconds=sum(pt.seconds for pt in points + held),
+                                 wall_seconds=time.perf_counter() - t0, ran_in=workers.where)})
+        write_table(folder / "table.json", table)
+        write_points_csv(folder / "points.csv", table)
+    return table
+
+
+def runner_renders(folder: Path) -> int:
+    """Target renders of the stored lookups (checks/)."""
+    from ..report import read_report
+
+    total = 0
+    for path in sorted((folder / "checks").glob("*/*/result.json")):
+        try:
+            total += read_report(path).renders
+        except ConfigError:
+            continue
+    return total
+
+
+def _check_holdout(p: Plan, registry: AdapterRegistry, runner: Runner, draft: Table, scene) -> dict[str, Candidate]:
+    """Each candidate map's lookup of each held-out material, rendered and judged (no held-out lights:
+    the scene's error is what is compared with the direct fit's)."""
+    fitted = [(i, h) for i, h in enumerate(draft.holdout) if h.error is not None]
+    if not fitted:
+        return draft.candidates
+    settings = draft.spec.options.model_copy(update={"validation": "none"})
+    tasks, where = [], []
+    for method in draft.candidates:
+        tmap = TableMap(draft, method)
+        for i, h in fitted:
+            params, expected = tmap.params(h.values)
+            lookup = Lookup(table=draft.name, digest="draft", method=method, params=params,
+                            expected_error=expected)
+            tasks.append(_task(p, registry, f"checks/{method}/{h.id}", h.values, f"{method} {h.id}", scene,
+                               settings, lookup))
+            where.append((method, i))
+    results = runner.run(tasks)
+    errors: dict[str, list] = {m: [None] * len(draft.holdout) for m in draft.candidates}
+    for (method, i), d in zip(where, results):
+        errors[method][i] = d.report.metrics.relative_rmse if d.report is not None else None
+    out = {}
+    for method, c in draft.candidates.items():
+        ratios = [e / h.error if e is not None and h.error else None for e, h in zip(errors[method], draft.holdout)]
+        r = np.array([x for x in ratios if x is not None], float)
+        out[method] = c.model_copy(update={
+            "holdout_errors": errors[method], "ratios": ratios,
+            "median_ratio": float(np.median(r)) if r.size else None,
+            "p95_ratio": float(np.percentile(r, 95)) if r.size else None})
+    return out
+
+
+def choose(candidates: dict[str, Candidate]) -> tuple[str, str]:
+    """The map whose lookups of the held-out materials come closest to their direct fits (median
+    ratio, then the 95th percentile); without held-out materials, the least cross-validated error."""
+    judged = {m: c for m, c in candidates.items() if c.median_ratio is not None}
+    if judged:
+        best = min(judged, key=lambda m: (round(judged[m].median_ratio, 3), round(judged[m].p95_ratio, 3),
+                                          PREFERENCE.index(m)))
+        c = judged[best]
+        return best, (f"lookups of {sum(r is not None for r in c.ratios)} held-out materials: median "
+                      f"{c.median_ratio:.3f}, 95th percentile {c.p95_ratio:.3f} of the direct fit's error")
+
+    def cv(m: str) -> float:
+        vals = [v for k, v in candidates[m].cv_rms.items() if k != "error" and math.isfinite(v)]
+        return float(np.mean(vals)) if vals else math.inf
+
+    best = min(candidates, key=lambda m: (round(cv(m), 4), PREFERENCE.index(m)))
+    return best, f"no held-out materials: least cross-validated error on the grid ({cv(best):.4f} of the range)"
+
+
+def write_points_csv(path: Path, table: Table) -> Path:
+    buf = io.StringIO()
+    rows = []
+    for kind, pts in (("grid", table.points), ("holdout", table.holdout)):
+        for pt in pts:
+            row = {"kind": kind, "id": pt.id}
+            row.update({f"source.{k}": _cell(v) for k, v in pt.values.items()})
+            row.update({f"target.{o.param}": _cell((pt.params or {}).get(o.param)) for o in table.outputs
+                        if o.kind != "error"})
+            row.update({"error": _cell(pt.error), "noise_floor": _cell(pt.noise_floor), "verdict": pt.verdict,
+                        "used": pt.used, "left_out": pt.left_out, "reason": pt.reason})
+            rows.append(row)
+    cols: list[str] = []
+    for r in rows:
+        cols += [c for c in r if c not in cols]
+    w = csv.DictWriter(buf, fieldnames=cols)
+    w.writeheader()
+    w.writerows(rows)
+    return write_text_atomic(path, buf.getvalue())
+
+
+def _cell(v) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, (list, tuple)):
+        return " ".join(f"{float(x):.6g}" for x in v)
+    return f"{float(v):.6g}" if isinstance(v, (int, float)) else str(v)
+
+
+def _line(done: Done, i: int, n: int) -> str:
+    if done.report is None:
+        return f"[{i}/{n}] {done.task.title}: FAILED: {done.error}"
+    r = done.report
+    return (f"[{i}/{n}] {done.task.title}: {r.metrics.relative_rmse:.2%}, {r.renders} renders, {r.seconds:.1f} s, "
+            f"{r.verdict}" + (" [resumed]" if done.resumed else ""))
+
+
+__all__ = ["build_table", "plan", "choose", "record"]

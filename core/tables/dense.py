@@ -1,0 +1,91 @@
+"""A table's map baked on a fine regular grid over its unit cube, for textures: millions of texels
+are looked up by multilinear interpolation of the baked values, the cell and weights of each texel
+computed once and shared by every output that reads the same coordinates (bench/tables.py
+measures the time and what baking costs in accuracy)."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from .table import ERROR, TableMap
+
+NODES = {1: 257, 2: 129, 3: 49, 4: 21}
+"""Nodes per dimension of the baked grid, by the map's dimensions (about two million values at most)."""
+
+
+class _Cells:
+    """Each point's cell in a grid of ``n`` nodes per dimension and the weights of its corners."""
+
+    def __init__(self, columns: list[np.ndarray], shape: tuple[int, ...]):
+        d = len(columns)
+        strides = [int(np.prod(shape[k + 1:])) for k in range(d)]
+        self.base = np.zeros(len(columns[0]), np.int32)
+        fracs = []
+        for col, stride, n in zip(columns, strides, shape):
+            pos = np.clip(col, np.float32(0.0), np.float32(1.0)) * np.float32(n - 1)
+            lo = np.minimum(pos.astype(np.int32), np.int32(n - 2))
+            fracs.append(pos - lo.astype(np.float32))  # float32 throughout: float32 - int32 would be float64
+            self.base += lo * np.int32(stride)
+        self.corners = []
+        for corner in itertools.product((0, 1), repeat=d):
+            w = None
+            for f, c in zip(fracs, corner):
+                part = f if c else np.float32(1.0) - f
+                w = part.copy() if w is None else np.multiply(w, part, out=w)
+            self.corners.append((sum(c * s for c, s in zip(corner, strides)), w))
+
+    def interpolate(self, lut: np.ndarray) -> np.ndarray:
+        flat = lut.ravel()
+        out = np.zeros(len(self.base), np.float32)
+        for offset, w in self.corners:
+            out += w * flat.take(self.base + offset)
+        return out
+
+
+class DenseMap:
+    """`TableMap.predict` for many points at once, from the map baked on a fine grid."""
+
+    def __init__(self, tmap: TableMap, nodes: int | None = None):
+        self.tmap, self.table = tmap, tmap.table
+        want = nodes or NODES.get(len(self.table.shape), 11)
+        # Each axis's own grid points among the nodes: a multilinear map is then baked exactly.
+        self.shape = tuple((s - 1) * max(1, -(-(want - 1) // (s - 1))) + 1 for s in self.table.shape)
+        axes = [np.linspace(0.0, 1.0, n) for n in self.shape]
+        grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(axes))
+        self.luts = {o.label: tmap.regressors[o.label].predict(grid).astype(np.float32).reshape(self.shape)
+                     for o in self.table.outputs}
+
+    def predict(self, values: dict[str, np.ndarray], errors: bool = False) -> dict[str, np.ndarray]:
+        """Target values for N points (each axis N, or N x 3), as `TableMap.predict` (float32);
+        the error output only when ``errors``."""
+        layout = self.table.layout
+        cells: dict[int | None, _Cells] = {}
+
+        def at(channel: int | None) -> _Cells:
+            if channel not in cells:
+                cells[channel] = _Cells(layout.columns(values, channel, np.float32), self.shape)
+            return cells[channel]
+
+        out: dict[str, np.ndarray] = {}
+        chans: dict[str, list] = {}
+        for o in self.table.outputs:
+            if o.kind == "error" and not errors:
+                continue
+            lut = self.luts[o.label]
+            if o.per_channel:
+                out[o.param] = np.stack([_decode(o, at(c).interpolate(lut)) for c in range(3)], axis=-1)
+            elif o.channel is not None:
+                chans.setdefault(o.param, [None] * 3)[o.channel] = _decode(o, at(None).interpolate(lut))
+            else:
+                out[o.param] = _decode(o, at(None).interpolate(lut))
+        out.update({k: np.stack(v, axis=-1) for k, v in chans.items()})
+        return out
+
+
+def _decode(output, t: np.ndarray) -> np.ndarray:
+    return output.from_unit(t, np.float32)
+
+
+__all__ = ["DenseMap", "ERROR"]

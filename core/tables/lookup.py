@@ -1,0 +1,98 @@
+"""A material through a remap table: checked against what the table was built for, then the target's
+parameters read from its map, with no render."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Any
+
+from ..errors import ConfigError
+from ..job import Lookup
+from ..schemas import Material, ModelSpec
+from .table import Table, TableMap, outside
+
+
+@dataclass(frozen=True)
+class Answer:
+    lookup: Lookup
+    """The parameters, as a job carries them."""
+    values: dict[str, Any]
+    """The source's axis values."""
+    seconds: float
+    """The map's evaluation alone."""
+
+
+def axis_values(table: Table, material: Material, source_spec: ModelSpec, file: str | None,
+                prefix: str = "params") -> dict[str, Any]:
+    """The material's values on the table's axes, once it is shown to be what the table was built
+    for: the same model, and the same values of every parameter that is not an axis."""
+    src = table.spec.source
+    if (material.adapter, material.model) != (src.adapter, src.model):
+        raise ConfigError(f"is {material.adapter}:{material.model}, and the table {table.name!r} maps "
+                          f"{src.adapter}:{src.model}: use a table built for this model", file=file, field="model")
+    params = source_spec.complete(material.params, file=file, prefix=prefix)
+    for name, value in source_spec.active(params).items():
+        if name in table.spec.axes or name not in table.source_params:
+            continue
+        if not _same(value, table.source_params[name]):
+            raise ConfigError(f"is {_text(value)}, and the table {table.name!r} was built for {_text(table.source_params[name])} "
+                              f"(its axes: {', '.join(table.spec.axes)}): build a table for this value (its spec's "
+                              f"source.params) or with {name} as an axis", file=file, field=f"{prefix}.{name}")
+    return {name: list(params[name]) if isinstance(params[name], tuple) else params[name] for name in table.spec.axes}
+
+
+def _same(a: Any, b: Any) -> bool:
+    if isinstance(a, str) or isinstance(b, str):
+        return a == b
+    xs = list(a) if isinstance(a, (list, tuple)) else [a]
+    ys = list(b) if isinstance(b, (list, tuple)) else [b]
+    return len(xs) == len(ys) and all(math.isclose(float(x), float(y), rel_tol=1e-6, abs_tol=1e-9)
+                                      for x, y in zip(xs, ys))
+
+
+def _text(v: Any) -> str:
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(f"{float(x):g}" for x in v) + "]"
+    return f"{v:g}" if isinstance(v, float) else str(v)
+
+
+def look_up(table: Table, tmap: TableMap, values: dict[str, Any]) -> Answer:
+    """The target's parameters for these axis values; values outside the grid are clamped and said."""
+    t0 = time.perf_counter()
+    params, expected = tmap.params(values)
+    seconds = time.perf_counter() - t0
+    lookup = Lookup(table=table.name, digest=table.digest, method=tmap.method, params=params,
+                    expected_error=expected, outside=outside(table, values))
+    return Answer(lookup, values, seconds)
+
+
+def write_answer(folder, resolved, answer: Answer, adapter, table_file: str) -> list:
+    """A lookup without renders: the native material and `lookup.json`, each written aside and
+    moved in (`lookup.json` last)."""
+    import json
+    import tempfile
+    from pathlib import Path
+
+    from .. import __version__
+    from ..atomic import why, write_bytes_atomic, write_json_atomic
+
+    job, spec = resolved.job, resolved.target_spec
+    params = spec.active(resolved.base)
+    try:
+        with tempfile.TemporaryDirectory(prefix="brdfremap-") as tmp:
+            made = [Path(p) for p in adapter.write_native(job.target.model, dict(resolved.base), Path(tmp))]
+            files = [write_bytes_atomic(Path(folder) / p.name, p.read_bytes()) for p in made]
+    except OSError as exc:
+        raise ConfigError(f"cannot write the native material: {why(exc)}", file=str(folder)) from None
+    lk = answer.lookup
+    doc = {"tool": f"brdf-remap {__version__}", "table": {"name": lk.table, "file": table_file, "digest": lk.digest,
+                                                         "method": lk.method},
+           "source": json.loads(job.source.model_dump_json()), "target": {"adapter": job.target.adapter,
+                                                                          "model": job.target.model},
+           "params": {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()},
+           "axis_values": answer.values, "expected_error": lk.expected_error, "outside": lk.outside,
+           "lookup_seconds": answer.seconds, "files": [p.name for p in files]}
+    files.append(write_json_atomic(Path(folder) / "lookup.json", doc))
+    return files

@@ -1,0 +1,173 @@
+"""Candidate maps from a table's grid of fits to the target parameters: smooth regressions of each
+target parameter on the source's, in the unit cube of the axes.
+
+Three kinds are compared (`METHODS`): a multilinear interpolation of the grid, a low-order
+polynomial (the JCGT paper's parametric form, its degree chosen by cross-validation) and a
+thin-plate-spline RBF (its smoothing chosen the same way). Each is rebuilt from the grid and its
+hyperparameters whenever a table is read, so a table stores data, never code."""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+FOLDS = 5
+RIDGE = 1e-9
+POLY_DEGREES = (1, 2, 3)
+RBF_SMOOTHING = (0.0, 1e-5, 1e-4, 1e-3, 1e-2)
+
+
+class Regressor(Protocol):
+    def predict(self, x: np.ndarray) -> np.ndarray:
+        """N x dims unit coordinates -> N values (unit scale of the target parameter)."""
+
+
+@dataclass(frozen=True)
+class Grid:
+    """The training data of one output: the points' unit coordinates, their index on the grid, the
+    value, and which points the map may use (the others' fits are in question)."""
+
+    x: np.ndarray
+    idx: np.ndarray
+    y: np.ndarray
+    used: np.ndarray
+    shape: tuple[int, ...]
+
+    def subset(self, keep: np.ndarray) -> "Grid":
+        return Grid(self.x, self.idx, self.y, self.used & keep, self.shape)
+
+
+class Multilinear:
+    """Interpolation of the grid, multilinear in each cell; a point left out is filled from its
+    used neighbours on the grid (inverse distance), so the grid stays whole."""
+
+    name = "multilinear"
+
+    def __init__(self, grid: Grid, _: float | int | None = None):
+        values = np.full(grid.shape, np.nan)
+        values[tuple(grid.idx[grid.used].T)] = grid.y[grid.used]
+        self.values = _fill(values)
+        self.axes = [np.linspace(0.0, 1.0, n) for n in grid.shape]
+
+    def predict(self, x: np.ndarray) -> np.ndarray:
+        x = np.clip(np.asarray(x, np.float64), 0.0, 1.0)
+        out = np.zeros(len(x))
+        # The cell of each point and its weights along each axis, then the 2^d corners summed.
+        lo, w = [], []
+        for d, n in enumerate(self.values.shape):
+            pos = x[:, d] * (n - 1)
+            i = np.minimum(np.floor(pos).astype(int), n - 2)
+            lo.append(i)
+            w.append(pos - i)
+        for corner in itertools.product((0, 1), repeat=len(lo)):
+            weight = np.ones(len(x))
+            for d, c in enumerate(corner):
+                weight *= w[d] if c else 1.0 - w[d]
+            out += weight * self.values[tuple(lo[d] + c for d, c in enumerate(corner))]
+        return out
+
+
+def _fill(values: np.ndarray) -> np.ndarray:
+    """Grid nodes without a value (NaN) get the inverse-distance mean of the nodes that have one."""
+    holes = np.argwhere(np.isnan(values))
+    if len(holes) == 0:
+        return values
+    have = np.argwhere(~np.isnan(values))
+    if len(have) == 0:
+        raise ValueError("no point of the grid can be used")
+    scale = 1.0 / np.maximum(np.array(values.shape) - 1, 1)
+    out = values.copy()
+    for h in holes:
+        d = np.linalg.norm((have - h) * scale, axis=1)
+        wgt = 1.0 / d ** 2
+        out[tuple(h)] = float(np.sum(wgt * values[tuple(have.T)]) / np.sum(wgt))
+    return out
+
+
+def monomials(dims: int, degree: int) -> list[tuple[int, ...]]:
+    """Exponent tuples of every monomial of total degree up to ``degree``."""
+    return [e for e in itertools.product(range(degree + 1), repeat=dims) if sum(e) <= degree]
+
+
+class Polynomial:
+    """Least squares polynomial of total degree ``degree`` in the unit coordinates."""
+
+    name = "polynomial"
+
+    def __init__(self, grid: Grid, degree: float | int | None):
+        self.terms = monomials(grid.x.shape[1], int(degree or 1))
+        a = self._design(grid.x[grid.used])
+        lhs = a.T @ a + RIDGE * np.eye(len(self.terms))
+        self.coef = np.linalg.solve(lhs, a.T @ grid.y[grid.used])
+
+    def _design(self, x: np.ndarray) -> np.ndarray:
+        return np.stack([np.prod(x ** np.array(e), axis=1) for e in self.terms], axis=1)
+
+    def predict(self, x: np.ndarray) -> np.ndarray:
+        return self._design(np.clip(np.asarray(x, np.float64), 0.0, 1.0)) @ self.coef
+
+
+class Rbf:
+    """scipy's thin-plate-spline RBF with a linear term, smoothed by ``smoothing``."""
+
+    name = "rbf"
+
+    def __init__(self, grid: Grid, smoothing: float | int | None):
+        from scipy.interpolate import RBFInterpolator
+
+        self.f = RBFInterpolator(grid.x[grid.used], grid.y[grid.used], kernel="thin_plate_spline", degree=1,
+                                 smoothing=float(smoothing or 0.0))
+
+    def predict(self, x: np.ndarray) -> np.ndarray:
+        return self.f(np.clip(np.asarray(x, np.float64), 0.0, 1.0))
+
+
+METHODS = {"multilinear": Multilinear, "polynomial": Polynomial, "rbf": Rbf}
+
+
+def hyperparameters(method: str, grid: Grid) -> list[float | int | None]:
+    """The hyperparameters cross-validation chooses among, for this much data."""
+    n = int(grid.used.sum())
+    if method == "polynomial":
+        fits = [d for d in POLY_DEGREES if len(monomials(grid.x.shape[1], d)) <= max(2, n // 2)]
+        return list(fits or POLY_DEGREES[:1])
+    if method == "rbf":
+        return list(RBF_SMOOTHING)
+    return [None]
+
+
+def folds(n: int, k: int = FOLDS, seed: int = 0) -> list[np.ndarray]:
+    """``k`` disjoint test masks over ``n`` points (a fixed shuffle: the same folds every build)."""
+    order = np.random.default_rng(seed).permutation(n)
+    return [np.isin(np.arange(n), order[i::k]) for i in range(k)]
+
+
+def cv_rms(method: str, grid: Grid, h: float | int | None) -> float:
+    """Root-mean-square error on the used points of each fold, predicted by a map fitted without it."""
+    errs = []
+    for test in folds(len(grid.y)):
+        train = grid.subset(~test)
+        test = test & grid.used
+        if not test.any() or int(train.used.sum()) < grid.x.shape[1] + 2:
+            continue
+        try:
+            pred = METHODS[method](train, h).predict(grid.x[test])
+        except (ValueError, np.linalg.LinAlgError):
+            return math.inf
+        errs.append((pred - grid.y[test]) ** 2)
+    return float(np.sqrt(np.mean(np.concatenate(errs)))) if errs else math.inf
+
+
+def choose_hyperparameter(method: str, grid: Grid) -> tuple[float | int | None, float]:
+    """The hyperparameter with the least cross-validated error, and that error."""
+    scored = [(cv_rms(method, grid, h), i, h) for i, h in enumerate(hyperparameters(method, grid))]
+    err, _, h = min(scored, key=lambda s: (s[0], s[1]))
+    return h, err
+
+
+def build(method: str, grid: Grid, h: float | int | None) -> Regressor:
+    return METHODS[method](grid, h)

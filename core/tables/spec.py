@@ -1,0 +1,199 @@
+"""The table spec (`remap schema table-spec`): a grid over a source model's continuous parameters,
+remapped point by point to a target model, from which a smooth map is learnt (Sztrajman et al.,
+JCGT 2019).
+
+An axis is a source parameter. A scalar one is sampled at `steps` values over its range (evenly,
+or evenly in its logarithm); an RGB one either as a grey level (`mode: scale`: the map is then
+applied channel by channel, the paper's separable form, which holds where each image channel
+depends on its own component alone) or over the colour cube (`mode: channels`: three axes, a
+full regression, steps³ points)."""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from ..configio import load_yaml_model
+from ..experiments.spec import SceneSpec, SourceSide
+from ..job import Target
+from ..model import Strict
+from ..settings import Settings
+
+MAX_POINTS = 20_000
+CHANNELS = "rgb"
+
+
+class Axis(Strict):
+    range: tuple[float, float] = Field(description="Lowest and highest value sampled (within the parameter's "
+                                                   "bounds).")
+    steps: int = Field(ge=2, le=64, description="Values sampled, both ends included.")
+    scale: Literal["linear", "log"] = Field("linear", description="Spacing of the values: even, or even in the "
+                                                                   "logarithm (roughness: most change is near 0).")
+    mode: Literal["scale", "channels"] = Field(
+        "scale", description="RGB parameters only. scale: sampled as grey levels, the map applied to each channel "
+                             "alone (the separable form; needs a separable parameter); channels: each channel an "
+                             "axis of its own (a full regression over the colour cube, steps³ points).")
+
+    @model_validator(mode="after")
+    def _check(self) -> "Axis":
+        lo, hi = self.range
+        if not (math.isfinite(lo) and math.isfinite(hi)) or not lo < hi:
+            raise ValueError("range must be two finite numbers, the lower first")
+        if self.scale == "log" and lo <= 0:
+            raise ValueError("a log axis needs a range above 0")
+        return self
+
+    def values(self) -> list[float]:
+        lo, hi = self.range
+        if self.scale == "log":
+            return [float(v) for v in np.geomspace(lo, hi, self.steps)]
+        return [float(v) for v in np.linspace(lo, hi, self.steps)]
+
+    def to_unit(self, v, dtype=np.float64):
+        """Values (any array shape) as coordinates in [0, 1] over the range (outside it: beyond)."""
+        lo, hi = self.range
+        v = np.asarray(v, dtype=dtype)
+        if self.scale == "log":
+            tiny = np.finfo(dtype).tiny
+            return (np.log(np.maximum(v, dtype(tiny))) - dtype(math.log(lo))) * dtype(1.0 / (math.log(hi) -
+                                                                                             math.log(lo)))
+        return (v - dtype(lo)) * dtype(1.0 / (hi - lo))
+
+    def from_unit(self, t):
+        lo, hi = self.range
+        t = np.asarray(t, dtype=np.float64)
+        if self.scale == "log":
+            return np.exp(math.log(lo) + t * (math.log(hi) - math.log(lo)))
+        return lo + t * (hi - lo)
+
+
+class TableSpec(Strict):
+    """A remap table to build: `remap table build SPEC.yaml --out TABLE`."""
+
+    kind: Literal["table"]
+    name: str = Field("", description="A name for people (default: the file's).")
+    description: str = ""
+    source: SourceSide = Field(description="The source model; `params` holds what every point shares (a "
+                                           "distribution, a fixed IOR).")
+    axes: dict[str, Axis] = Field(description="Source parameters the grid spans, in order.", min_length=1)
+    target: Target = Field(description="The target model; `fix` holds parameters at values (every discrete choice "
+                                       "the fit would otherwise try must be held: the map is continuous).")
+    holdout: int = Field(10, ge=0, le=1000, description="Source materials drawn at random inside the grid's range "
+                                                        "(colours not grey), fitted directly, on which the "
+                                                        "candidate maps are compared by image error; 0: by "
+                                                        "cross-validation of the grid's parameters alone.")
+    seed: int = Field(0, ge=0, le=2**31 - 1, description="Seed of the held-out draw.")
+    scene: SceneSpec = SceneSpec()
+    options: Settings = Field(default_factory=Settings, description="How every fit runs (as `remap`'s flags).")
+
+    @model_validator(mode="after")
+    def _check(self) -> "TableSpec":
+        shared = sorted(set(self.axes) & set(self.source.params))
+        if shared:
+            raise ValueError(f"axes.{shared[0]}: also given in source.params: an axis's values come from the grid")
+        n = math.prod(a.steps ** 3 if a.mode == "channels" else a.steps for a in self.axes.values())
+        if n > MAX_POINTS:
+            raise ValueError(f"axes: {n} points, at most {MAX_POINTS} in one table")
+        return self
+
+
+def load_table_spec(path: str | Path) -> TableSpec:
+    return load_yaml_model(path, TableSpec, "a table spec")
+
+
+@dataclass(frozen=True)
+class Dim:
+    """One coordinate of the map's input: an axis, or one channel of a `channels` axis."""
+
+    axis: str
+    channel: int | None
+    """None: a scalar axis, or a `scale` axis (its grey level: the channel the map is applied to)."""
+
+    @property
+    def label(self) -> str:
+        return self.axis if self.channel is None else f"{self.axis}.{CHANNELS[self.channel]}"
+
+
+@dataclass(frozen=True)
+class Layout:
+    """The axes as the map sees them: their kinds (from the source model) and the input dimensions."""
+
+    axes: dict[str, Axis]
+    kinds: dict[str, str]
+    """Axis name -> "scalar" or "rgb"."""
+
+    @property
+    def dims(self) -> list[Dim]:
+        out = []
+        for name, ax in self.axes.items():
+            if self.kinds[name] == "rgb" and ax.mode == "channels":
+                out += [Dim(name, c) for c in range(3)]
+            else:
+                out.append(Dim(name, None))
+        return out
+
+    @property
+    def separable(self) -> bool:
+        """Every RGB axis is a grey `scale`: an RGB target parameter is mapped channel by channel."""
+        return not any(self.kinds[n] == "rgb" and a.mode == "channels" for n, a in self.axes.items())
+
+    def grid(self) -> list[tuple[tuple[int, ...], dict[str, Any]]]:
+        """Every grid point: its index along each dimension, and its axis values (RGB as triples)."""
+        dims = self.dims
+        out = []
+        for idx in itertools.product(*(range(self.axes[d.axis].steps) for d in dims)):
+            values: dict[str, Any] = {}
+            for d, i in zip(dims, idx):
+                v = self.axes[d.axis].values()[i]
+                if d.channel is not None:
+                    values.setdefault(d.axis, [0.0, 0.0, 0.0])[d.channel] = v
+                else:
+                    values[d.axis] = [v, v, v] if self.kinds[d.axis] == "rgb" else v
+            out.append((idx, values))
+        return out
+
+    def draw(self, n: int, seed: int) -> list[dict[str, Any]]:
+        """``n`` source values at random inside the ranges (a scrambled Sobol' sequence over the
+        unit cube of every channel: colours are not grey)."""
+        from scipy.stats import qmc
+
+        cols: list[tuple[str, int | None]] = []
+        for name in self.axes:
+            cols += [(name, c) for c in range(3)] if self.kinds[name] == "rgb" else [(name, None)]
+        if n == 0:
+            return []
+        unit = qmc.Sobol(len(cols), scramble=True, seed=seed).random(1 << max(0, (n - 1).bit_length()))[:n]
+        out = []
+        for row in unit:
+            values: dict[str, Any] = {}
+            for (name, c), t in zip(cols, row):
+                v = float(self.axes[name].from_unit(t))
+                if c is None:
+                    values[name] = v
+                else:
+                    values.setdefault(name, [0.0, 0.0, 0.0])[c] = v
+            out.append(values)
+        return out
+
+    def features(self, values: dict[str, np.ndarray], channel: int | None) -> np.ndarray:
+        """The map's input for source values (each an array: N for a scalar axis, N x 3 for an RGB
+        one), as N x dims coordinates in the unit cube. ``channel`` picks the channel of `scale`
+        axes (None: their mean), for a target parameter mapped channel by channel."""
+        return np.stack(self.columns(values, channel), axis=-1)
+
+    def columns(self, values: dict[str, np.ndarray], channel: int | None, dtype=np.float64) -> list[np.ndarray]:
+        """`features`, a column (a contiguous array) per dimension."""
+        cols = []
+        for d in self.dims:
+            v = np.asarray(values[d.axis])
+            if self.kinds[d.axis] == "rgb":
+                v = v[..., d.channel] if d.channel is not None else (
+                    v.mean(axis=-1) if channel is None else v[..., channel])
+            cols.append(np.ascontiguousarray(self.axes[d.axis].to_unit(v, dtype)))
+        return cols

@@ -1,0 +1,273 @@
+"""The remap table file (`table.json`, `remap schema table`): the grid and its fits, their findings,
+the candidate maps and how each did on held-out materials, and the map chosen. Versioned like the
+report, with a digest of its content; `TableMap` rebuilds the chosen map from it and answers
+lookups, vectorised (one material or every texel of a texture)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import Field, ValidationError, computed_field
+
+from ..configio import validation_message
+from ..errors import ConfigError
+from ..model import Strict, WithDerived
+from ..schemas import ModelSpec, ParamSpec
+from .maps import Grid, Regressor, build
+from .spec import CHANNELS, Layout, TableSpec
+
+TABLE_SCHEMA_VERSION = 1
+ERROR = "error"
+"""The output that maps a direct fit's relative RMSE (its logarithm): what a fit reaches there."""
+
+
+class Output(Strict):
+    """One regressed quantity: a target parameter (or one channel of it), on its unit scale."""
+
+    param: str
+    kind: Literal["scalar", "rgb", "error"]
+    channel: int | None = Field(None, description="The channel of an RGB parameter mapped by a regression of its "
+                                                  "own (a full regression); None otherwise.")
+    per_channel: bool = Field(False, description="An RGB parameter whose one regression is applied to each channel "
+                                                 "with that channel of the source's colours (the separable form).")
+    lower: float
+    upper: float
+    scale: Literal["linear", "log"]
+
+    @property
+    def label(self) -> str:
+        return self.param if self.channel is None else f"{self.param}.{CHANNELS[self.channel]}"
+
+    def to_unit(self, v) -> np.ndarray:
+        v = np.asarray(v, np.float64)
+        if self.scale == "log":
+            return (np.log(np.maximum(v, self.lower)) - math.log(self.lower)) / (math.log(self.upper) -
+                                                                                  math.log(self.lower))
+        return (v - self.lower) / (self.upper - self.lower)
+
+    def from_unit(self, t, dtype=np.float64) -> np.ndarray:
+        t = np.clip(np.asarray(t, dtype), dtype(0.0), dtype(1.0))
+        if self.scale == "log":
+            lo, hi = math.log(self.lower), math.log(self.upper)
+            return np.exp(dtype(lo) + t * dtype(hi - lo))
+        return dtype(self.lower) + t * dtype(self.upper - self.lower)
+
+
+def outputs_for(spec: ModelSpec, names: list[str], separable: bool) -> list[Output]:
+    """The regressions that map these target parameters; then the direct fit's error."""
+    out = []
+    for name in names:
+        p: ParamSpec = spec.param(name)
+        common = dict(param=name, lower=p.lower, upper=p.upper, scale=p.scale)
+        if p.kind == "rgb" and separable and p.separable:
+            out.append(Output(kind="rgb", per_channel=True, **common))
+        elif p.kind == "rgb":
+            out += [Output(kind="rgb", channel=c, **common) for c in range(3)]
+        else:
+            out.append(Output(kind="scalar", **common))
+    out.append(Output(param=ERROR, kind="error", lower=1e-4, upper=10.0, scale="log"))
+    return out
+
+
+class PointRecord(Strict):
+    """One fit of the table: a grid point or a held-out material."""
+
+    id: str
+    index: list[int] = Field(default_factory=list, description="Its index along each input dimension (grid points).")
+    values: dict[str, Any] = Field(description="The source's axis values (RGB as triples).")
+    params: dict[str, Any] | None = Field(description="The fitted target parameters (None: the fit failed).")
+    error: float | None = Field(description="Relative RMSE of the fit.")
+    noise_floor: float | None = None
+    verdict: str = Field(description="ok, mismatch, unreliable, or failed.")
+    reason: str = Field("", description="The verdict's findings in words (or the failure).")
+    findings: list[str] = Field(default_factory=list, description="The kinds of the findings of severity unreliable.")
+    used: bool = Field(description="Whether the map was fitted to it.")
+    left_out: str = Field("", description="Why it was left out of the regression.")
+    renders: int = 0
+    seconds: float = 0.0
+    key: str = ""
+
+
+class Candidate(Strict):
+    """One kind of map, fitted to the used grid points, and how it did."""
+
+    method: str
+    hyper: dict[str, float | int | None] = Field(description="Per output: the hyperparameter cross-validation chose "
+                                                             "(polynomial degree, RBF smoothing).")
+    cv_rms: dict[str, float] = Field(description="Per output: cross-validated RMS error on the grid, as a fraction "
+                                                 "of the parameter's range (its log range for a log parameter).")
+    holdout_errors: list[float | None] = Field(default_factory=list, description="Relative RMSE of its lookup of "
+                                                                                 "each held-out material.")
+    ratios: list[float | None] = Field(default_factory=list, description="Each held-out material's lookup error "
+                                                                         "over its direct fit's.")
+    median_ratio: float | None = None
+    p95_ratio: float | None = None
+
+
+class BuildRecord(Strict):
+    points: int
+    used: int
+    flagged: int = Field(description="Grid points whose verdict is unreliable.")
+    left_out: int = Field(description="Grid points left out of the regression (their fit itself is in question).")
+    holdout: int
+    renders: int = Field(description="Target renders of every fit and check, all runs.")
+    seconds: float = Field(description="Sum of the jobs' own times, all runs.")
+    wall_seconds: float = Field(description="This build's wall time (resumed jobs cost nothing).")
+    ran_in: str
+
+
+class Table(WithDerived):
+    """`table.json`: a remap table over a model pair."""
+
+    derived_fields = ("digest",)
+
+    schema_version: int
+    tool: str
+    name: str
+    spec: TableSpec
+    source_kinds: dict[str, str] = Field(description="Each axis's kind in the source model (scalar, rgb).")
+    source_params: dict[str, Any] = Field(description="The source parameters every point shares (completed with "
+                                                      "the model's defaults); a lookup checks a material against "
+                                                      "them.")
+    target_params: dict[str, Any] = Field(description="The target's complete parameters; the mapped ones are "
+                                                      "replaced by the map's values.")
+    versions: dict[str, str] = Field(description="Adapter versions the fits were made with.")
+    outputs: list[Output]
+    points: list[PointRecord]
+    holdout: list[PointRecord]
+    candidates: dict[str, Candidate]
+    chosen: str = Field(description="The method of the map lookups use.")
+    chosen_why: str
+    build: BuildRecord
+
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def digest(self) -> str:
+        """SHA-256 of what determines the map (all but the build's account of time and place): the
+        same table rebuilt gives the same digest, and lookups stored with it stay valid."""
+        doc = self.model_dump(mode="json", exclude={"digest", "build", "tool"})
+        return hashlib.sha256(json.dumps(doc, sort_keys=True, ensure_ascii=False).encode()).hexdigest()
+
+    @property
+    def layout(self) -> Layout:
+        return Layout(self.spec.axes, self.source_kinds)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(self.spec.axes[d.axis].steps for d in self.layout.dims)
+
+
+def grid_of(table: Table, output: Output) -> Grid:
+    """The training data of one output, from the table's points."""
+    layout, pts = table.layout, table.points
+    vals = {name: np.array([p.values[name] for p in pts], np.float64) for name in table.spec.axes}
+    x = layout.features(vals, None)
+    y = np.array([_target_value(p, output) for p in pts])
+    used = np.array([p.used for p in pts]) & np.isfinite(y)
+    return Grid(x, np.array([p.index for p in pts], int), np.nan_to_num(y), used, table.shape)
+
+
+def _target_value(p: PointRecord, output: Output) -> float:
+    if p.params is None:
+        return math.nan
+    if output.kind == "error":
+        return float(output.to_unit(p.error)) if p.error else math.nan
+    v = p.params.get(output.param)
+    if v is None:
+        return math.nan
+    if output.kind == "rgb":
+        v = float(np.mean(v)) if output.channel is None else float(v[output.channel])
+    return float(output.to_unit(v))
+
+
+class TableMap:
+    """A table's map, ready for lookups: target parameters for source axis values."""
+
+    def __init__(self, table: Table, method: str | None = None):
+        self.table, self.method = table, method or table.chosen
+        hyper = table.candidates[self.method].hyper
+        self.regressors: dict[str, Regressor] = {o.label: build(self.method, grid_of(table, o), hyper.get(o.label))
+                                                 for o in table.outputs}
+
+    def predict(self, values: dict[str, Any]) -> dict[str, np.ndarray]:
+        """Target values (N, or N x 3 for RGB) for source axis values (N, or N x 3; or a single
+        material's scalars and triples, giving N = 1), clamped to the grid's range."""
+        layout = self.table.layout
+        arr = {k: np.asarray(values[k], np.float64) for k in self.table.spec.axes}
+        arr = {k: (v.reshape(-1, 3) if layout.kinds[k] == "rgb" else v.reshape(-1)) for k, v in arr.items()}
+        out: dict[str, np.ndarray] = {}
+        chans: dict[str, list] = {}
+        for o in self.table.outputs:
+            f = self.regressors[o.label].predict
+            if o.per_channel:
+                out[o.param] = np.stack([o.from_unit(f(layout.features(arr, c))) for c in range(3)], axis=-1)
+            elif o.channel is not None:
+                chans.setdefault(o.param, [None] * 3)[o.channel] = o.from_unit(f(layout.features(arr, None)))
+            else:
+                out[o.param] = o.from_unit(f(layout.features(arr, None)))
+        out.update({k: np.stack(v, axis=-1) for k, v in chans.items()})
+        return out
+
+    def params(self, values: dict[str, Any]) -> tuple[dict[str, Any], float]:
+        """One material's complete target parameters and the error a direct fit reaches there."""
+        pred = self.predict(values)
+        params = dict(self.table.target_params)
+        for k, v in pred.items():
+            if k != ERROR:
+                params[k] = [float(x) for x in v[0]] if v.ndim == 2 else float(v[0])
+        return params, float(pred[ERROR][0])
+
+
+def outside(table: Table, values: dict[str, Any]) -> list[str]:
+    """The axes whose values lie outside the grid's range, in words (clamped by the map)."""
+    out = []
+    for name, ax in table.spec.axes.items():
+        v = np.asarray(values[name], np.float64)
+        lo, hi = ax.range
+        below, above = v < lo * (1 - 1e-9) - 1e-12, v > hi * (1 + 1e-9) + 1e-12
+        if below.any() or above.any():
+            shown = (f"{float(v.min()):.4g}" if below.any() else f"{float(v.max()):.4g}")
+            what = "below" if below.any() else "above"
+            count = "" if v.size <= 3 else f" ({int((below | above).sum())} of {v.size} values)"
+            out.append(f"{name} {shown} {what} the table's range [{lo:g}, {hi:g}]{count}")
+    return out
+
+
+def write_table(path: Path, table: Table) -> Path:
+    from ..atomic import write_text_atomic
+
+    return write_text_atomic(path, json.dumps(table.model_dump(mode="json"), indent=1, ensure_ascii=False) + "\n")
+
+
+def read_table(path: str | Path) -> Table:
+    """A table file, checked: its format version and its digest (an edited table is refused)."""
+    p = Path(path)
+    if p.is_dir():
+        p = p / "table.json"
+    try:
+        doc = json.loads(p.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ConfigError("not found: give a table built by `remap table build` (its folder or its table.json)",
+                          file=str(p)) from None
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise ConfigError(f"cannot read it as JSON: {exc}", file=str(p)) from None
+    if not isinstance(doc, dict) or "chosen" not in doc or not isinstance(doc.get("schema_version"), int):
+        raise ConfigError("not a remap table (build one with `remap table build SPEC.yaml --out DIR`)", file=str(p))
+    if doc["schema_version"] != TABLE_SCHEMA_VERSION:
+        newer = doc["schema_version"] > TABLE_SCHEMA_VERSION
+        raise ConfigError(f"table format {doc['schema_version']}; this brdf-remap reads {TABLE_SCHEMA_VERSION}: "
+                          + ("upgrade brdf-remap" if newer else "build the table again"), file=str(p))
+    try:
+        table = Table.model_validate(doc)
+    except ValidationError as exc:
+        field, msg = validation_message(exc)
+        raise ConfigError(msg, file=str(p), field=field) from None
+    if doc.get("digest") != table.digest:
+        raise ConfigError("was edited after it was built (its digest does not match its content): build it again",
+                          file=str(p))
+    return table

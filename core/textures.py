@@ -1,0 +1,136 @@
+"""Textures: images that drive a material's parameters texel by texel.
+
+A `Texture` names an image file, how its pixel values become parameter values (an sRGB-encoded
+colour map is decoded through OpenColorIO; a data map is read as it is), and its filtering. Read,
+a texture is an array of linear values: H x W for a scalar parameter (an RGB image gives its
+luminance, as Mitsuba and Blender do), H x W x 3 for an RGB one. Written, a colour map (an RGB
+parameter within [0, 1]) is a 16-bit sRGB PNG, a data map within [0, 1] a 16-bit linear PNG, and
+anything beyond (an IOR) a float EXR.
+
+The probe sphere's texture coordinates, which every adapter that renders textures realises:
+u = φ / 2π and v = θ / π of the sphere's own frame (its pole along the image's up, +y; θ = 0 at
+the top pole; φ = 0 towards the image's right, +x, increasing away from the viewer, so the half the
+camera sees is u from 0.5 to 1), and an image's top row at v = 0, its left column at u = 0.
+`tests/adapters/test_textures.py` checks each adapter against another with a checker of colours."""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from pydantic import Field
+
+from .errors import ConfigError
+from .model import Strict
+
+SRGB, LINEAR = "srgb_tx", "lin_rec709"
+"""OpenColorIO's names (the configuration OpenImageIO ships) for an sRGB-encoded texture and linear Rec.709."""
+LUMA = np.array([0.2126, 0.7152, 0.0722])
+MAX_TEXELS = 8192 * 8192
+
+
+class Texture(Strict):
+    """An image that drives one parameter, texel by texel."""
+
+    file: str = Field(description="The image file (absolute).")
+    colorspace: Literal["srgb", "linear"] = Field(description="srgb: its values are sRGB-encoded (a colour map "
+                                                              "read as a renderer decodes it); linear: read as "
+                                                              "they are (a data map, an EXR).")
+    filter: Literal["linear", "nearest"] = Field("linear", description="How a renderer interpolates it.")
+    sha256: str = Field("", description="The file's content (a changed image is another job).")
+
+
+@dataclass(frozen=True)
+class TextureMap:
+    """A parameter's values texel by texel, as an adapter renders them: linear, float32, H x W (scalar)
+    or H x W x 3 (RGB), row 0 the image's top; ``filter`` how to interpolate between texels."""
+
+    values: np.ndarray
+    filter: str = "linear"
+
+
+def texture(path: str | Path, colorspace: str, filter: str = "linear", *, where: str = "") -> Texture:
+    """A texture of this file, hashed; a file that is not there or cannot be read is a ConfigError
+    naming it (and ``where`` the material and input that use it)."""
+    p = Path(path)
+    try:
+        digest = hashlib.sha256(p.read_bytes()).hexdigest()
+    except OSError as exc:
+        raise ConfigError(f"cannot read the texture {p}: {exc.strerror or exc}" + (f" ({where})" if where else ""),
+                          file=str(p)) from None
+    return Texture(file=str(p.resolve()), colorspace=colorspace, filter=filter, sha256=digest)  # type: ignore[arg-type]
+
+
+def read_values(tex: Texture, kind: str, where: str = "") -> np.ndarray:
+    """The texture's linear values: H x W (scalar; an RGB image's luminance) or H x W x 3 (RGB; a grey
+    image repeated), float32, row 0 the image's top."""
+    import OpenImageIO as oiio
+
+    buf = oiio.ImageBuf(tex.file)
+    spec = buf.spec()
+    if buf.has_error or spec.nchannels < 1:
+        raise ConfigError(f"cannot read the texture: {buf.geterror() or 'no channels'}" + (f" ({where})" if where else ""),
+                          file=tex.file)
+    if spec.width * spec.height > MAX_TEXELS:
+        raise ConfigError(f"{spec.width} x {spec.height} texels: at most {MAX_TEXELS} in one texture", file=tex.file)
+    px = np.asarray(buf.get_pixels(oiio.FLOAT), np.float32)
+    px = px[..., :3] if px.shape[-1] >= 3 else np.repeat(px[..., :1], 3, axis=-1)
+    if tex.colorspace == "srgb":
+        px = _convert(px, SRGB, LINEAR)
+    return np.ascontiguousarray(px @ LUMA.astype(np.float32) if kind == "scalar" else px)
+
+
+def _convert(px: np.ndarray, src: str, dst: str) -> np.ndarray:
+    import OpenImageIO as oiio
+
+    out = oiio.ImageBufAlgo.colorconvert(oiio.ImageBuf(np.ascontiguousarray(px, np.float32)), src, dst)
+    if out.has_error:
+        raise ConfigError(f"colour conversion {src} -> {dst} failed: {out.geterror()}")
+    return np.asarray(out.get_pixels(oiio.FLOAT), np.float32)[..., :3]
+
+
+def resized(values: np.ndarray, width: int, height: int) -> np.ndarray:
+    """Values resampled to width x height (OpenImageIO's filtered resize)."""
+    import OpenImageIO as oiio
+
+    arr = values[..., None] if values.ndim == 2 else values
+    buf = oiio.ImageBufAlgo.resize(oiio.ImageBuf(np.ascontiguousarray(arr, np.float32)),
+                                   roi=oiio.ROI(0, width, 0, height, 0, 1, 0, arr.shape[-1]))
+    out = np.asarray(buf.get_pixels(oiio.FLOAT), np.float32)
+    return out[..., 0] if values.ndim == 2 else out
+
+
+def kind_of_file(lower: float, upper: float, rgb: bool) -> tuple[str, str]:
+    """How a target map of values in [lower, upper] is written: (extension, colorspace)."""
+    if lower >= 0.0 and upper <= 1.0:
+        return ".png", ("srgb" if rgb else "linear")
+    return ".exr", "linear"
+
+
+def encode(values: np.ndarray, suffix: str, colorspace: str) -> bytes:
+    """A map's file as bytes: a 16-bit PNG (sRGB-encoded for a colour map) or a float EXR."""
+    import tempfile
+
+    import OpenImageIO as oiio
+
+    arr = values[..., None] if values.ndim == 2 else values
+    arr = np.ascontiguousarray(arr, np.float32)
+    if colorspace == "srgb":
+        arr = _convert(arr, LINEAR, SRGB)
+    fmt = "uint16" if suffix == ".png" else "float"
+    with tempfile.TemporaryDirectory(prefix="brdfremap-") as tmp:
+        path = Path(tmp) / f"map{suffix}"
+        spec = oiio.ImageSpec(arr.shape[1], arr.shape[0], arr.shape[2], fmt)
+        if suffix == ".exr":
+            spec.attribute("compression", "zip")
+        out = oiio.ImageOutput.create(str(path))
+        if out is None or not out.open(str(path), spec):
+            raise ConfigError(f"cannot write a texture: {oiio.geterror()}")
+        data = np.clip(arr, 0.0, 1.0) if suffix == ".png" else arr
+        ok = out.write_image(data)
+        if not (out.close() and ok):
+            raise ConfigError(f"cannot write a texture: {oiio.geterror()}")
+        return path.read_bytes()

@@ -1,0 +1,153 @@
+"""A textured source's job, past its uniform lookup: every texel remapped through the table, the
+target's maps as files beside its native material, and the textured source and result rendered
+on the probe sphere by their own renderers and compared.
+
+A target parameter that varies over the texture but that the target renderer takes only as a
+number (Mitsuba's roughplastic alpha) is written as its mean, and the record says so."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from pydantic import Field
+
+from .errors import RenderError
+from .metrics import beyond_noise, delta_e_itp, relative_rmse
+from .model import Strict
+from .protocol import Adapter, check_image
+from .scene import ProbeScene
+from .textures import Texture, TextureMap, encode, kind_of_file
+
+CHECK_SPP = 4
+"""The textured check renders at this many times the scene's samples (each side twice, for its noise)."""
+
+
+class MapRecord(Strict):
+    param: str
+    file: str = Field(description="The map's file beside result.json.")
+    colorspace: str = Field(description="srgb (a colour map, 16-bit PNG) or linear (a data map).")
+    low: float = Field(description="Its lowest value (any channel).")
+    high: float = Field(description="Its highest value.")
+
+
+class TexturedCheck(Strict):
+    """The textured source and the textured result on the probe sphere, each by its own renderer."""
+
+    resolution: int
+    spp: int
+    error: float = Field(description="Relative RMSE of the textured result against the textured source.")
+    perceptual: float = Field(description="Mean ΔE_ITP over the lit pixels.")
+    noise_floor: float
+    beyond_noise: float
+
+
+class Textured(Strict):
+    """`result.json`'s record of a textured source remapped texel by texel through a table."""
+
+    table: str
+    inputs: dict[str, str] = Field(description="Each textured source input and its image file.")
+    width: int
+    height: int
+    maps: list[MapRecord] = Field(description="The target's maps, written beside the native material.")
+    constants: dict[str, Any] = Field(default_factory=dict, description="Target parameters uniform over the "
+                                                                        "texture (written as numbers).")
+    held: dict[str, str] = Field(default_factory=dict, description="Target parameters that vary over the texture "
+                                                                   "but the target takes only as a number: their "
+                                                                   "mean is written, and why.")
+    outside: list[str] = Field(default_factory=list, description="Texel values outside the table's range (clamped).")
+    notes: list[str] = Field(default_factory=list)
+    seconds: float = Field(description="The texel-by-texel remap (reading and writing the images aside).")
+    check: TexturedCheck | None = None
+    check_skipped: str = Field("", description="Why the textured check was not rendered.")
+
+
+@dataclass
+class Texturing:
+    record: Textured
+    files: dict[str, bytes]
+    native: dict[str, Texture]
+    """Target parameter -> its map (a file name of ``files``), for the native material."""
+    params: dict[str, Any]
+    """The native material's numbers: the fit's, with the constants and held means."""
+    images: tuple[np.ndarray, np.ndarray] | None = None
+
+
+def texture_result(resolved, source: Adapter, target: Adapter, params: dict[str, Any]) -> Texturing:
+    """Remap the job's textures through its table, and render the textured check."""
+    from .tables import TableMap, read_table
+    from .tables.texels import read_inputs, remap_texels
+
+    job = resolved.job
+    lk = job.lookup
+    table = read_table(lk.file)
+    if table.digest != lk.digest:
+        raise RenderError(f"the table {lk.file} changed since the job was planned: run the command again")
+    inputs = read_inputs(table, job.source, resolved.source_spec)
+    t0 = time.perf_counter()
+    out = remap_texels(table, TableMap(table, lk.method), inputs)
+    spec = resolved.target_spec
+    held = {n: f"{spec.name} takes {n} only as a number: its mean over the texture is written"
+            for n in out.maps if n not in spec.texturable or not target.textures}
+    native_params = {**params, **out.constants, **{n: _mean(out.maps[n]) for n in held}}
+    maps = {n: m for n, m in out.maps.items() if n not in held}
+    filt = next(iter(job.source.textures.values())).filter
+    files, native, records = {}, {}, []
+    for name, values in maps.items():
+        p = spec.param(name)
+        suffix, space = kind_of_file(p.lower, p.upper, p.kind == "rgb")
+        fname = f"map-{name}{suffix}"
+        files[fname] = encode(values, suffix, space)
+        native[name] = Texture(file=fname, colorspace=space, filter=filt)  # type: ignore[arg-type]
+        records.append(MapRecord(param=name, file=fname, colorspace=space, low=float(values.min()),
+                                 high=float(values.max())))
+    seconds = time.perf_counter() - t0
+    check, skipped, images = _check(resolved, source, target, inputs, maps, native_params, filt)
+    record = Textured(table=table.name, inputs={n: t.file for n, t in job.source.textures.items()},
+                      width=inputs.width, height=inputs.height, maps=records, constants=out.constants, held=held,
+                      outside=out.outside, notes=inputs.notes, seconds=seconds, check=check, check_skipped=skipped)
+    return Texturing(record, files, native, native_params, images)
+
+
+def _mean(values: np.ndarray) -> Any:
+    m = values.reshape(-1, values.shape[-1]).mean(axis=0) if values.ndim == 3 else values.mean()
+    return tuple(float(x) for x in m) if np.ndim(m) else float(m)
+
+
+def _check(resolved, source: Adapter, target: Adapter, inputs, maps: dict[str, np.ndarray],
+           params: dict[str, Any], filt: str):
+    """Both textured materials on the probe sphere, each side twice (its noise)."""
+    job = resolved.job
+    why = _cannot_check(resolved, source, target)
+    if why:
+        return None, why, None
+    scene: ProbeScene = job.scene.with_(spp=job.scene.spp * CHECK_SPP)
+    src_maps = {n: TextureMap(inputs.source_maps[n], t.filter) for n, t in job.source.textures.items()}
+    tgt_maps = {n: TextureMap(v, filt) for n, v in maps.items()}
+    src_params = resolved.source_params
+    renders = []
+    for adapter, model, p, m, who in ((source, job.source.model, src_params, src_maps, "source"),
+                                      (target, job.target.model, params, tgt_maps, "target")):
+        pair = [check_image(adapter.render_textured(model, dict(p), m, sc), sc, f"{who} textured")
+                for sc in (scene, scene.with_(seed=scene.seed + 1))]
+        renders.append(pair)
+    (s1, s2), (t1, t2) = renders
+    src, tgt = (s1 + s2) / 2, (t1 + t2) / 2
+    floor = float(np.hypot(relative_rmse(s1, s2), relative_rmse(t1, t2)) / 2)
+    err = relative_rmse(src, tgt)
+    check = TexturedCheck(resolution=scene.resolution, spp=scene.spp * 2, error=err,
+                          perceptual=delta_e_itp(src, tgt), noise_floor=floor, beyond_noise=beyond_noise(err, floor))
+    return check, "", (src, tgt)
+
+
+def _cannot_check(resolved, source: Adapter, target: Adapter) -> str:
+    job = resolved.job
+    for adapter, name in ((source, job.source.adapter), (target, job.target.adapter)):
+        if not adapter.textures:
+            return f"adapter {name!r} does not render textures"
+    loose = [n for n in job.source.textures if n not in resolved.source_spec.texturable]
+    if loose:
+        return f"{job.source.model} takes {', '.join(loose)} only as a number in its renderer"
+    return ""

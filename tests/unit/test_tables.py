@@ -1,0 +1,185 @@
+"""Remap tables without renders: the spec and its grid, the candidate maps, the table file and its
+lookups, and the checks a spec gets before any render."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+import yaml
+
+from brdfremap.core.errors import ConfigError
+from brdfremap.core.plugins import collect_adapters
+from brdfremap.core.schemas import Material
+from brdfremap.core.tables import Layout, TableMap, load_table_spec, read_table
+from brdfremap.core.tables.build import choose, plan
+from brdfremap.core.tables.lookup import axis_values, look_up
+from brdfremap.core.tables.maps import Grid, Multilinear, choose_hyperparameter, build
+from brdfremap.core.tables.spec import Axis, TableSpec
+from brdfremap.core.tables.table import TABLE_SCHEMA_VERSION, Candidate, Table, outside, write_table
+from tablekit import SPEC, synthetic_table
+
+def _spec(tmp_path, **changes):
+    doc = json.loads(json.dumps(SPEC))
+    doc.update(changes)
+    path = tmp_path / "spec.yaml"
+    path.write_text(yaml.safe_dump(doc))
+    return path
+
+
+def test_grid_spans_the_axes_and_the_draw_stays_inside(tmp_path):
+    spec = load_table_spec(_spec(tmp_path))
+    layout = Layout(spec.axes, {"alpha": "scalar", "specular_reflectance": "rgb"})
+    grid = layout.grid()
+    assert len(grid) == 12
+    alphas = sorted({v["alpha"] for _, v in grid})
+    assert alphas[0] == pytest.approx(0.05) and alphas[-1] == pytest.approx(0.4)
+    assert alphas[1] / alphas[0] == pytest.approx(alphas[2] / alphas[1])  # even in the logarithm
+    assert all(v["specular_reflectance"][0] == v["specular_reflectance"][2] for _, v in grid)  # grey levels
+    drawn = layout.draw(8, seed=3)
+    assert drawn == layout.draw(8, seed=3) and drawn != layout.draw(8, seed=4)
+    for v in drawn:
+        assert 0.05 <= v["alpha"] <= 0.4
+        assert all(0.3 <= c <= 1.0 for c in v["specular_reflectance"])
+    assert any(len(set(v["specular_reflectance"])) == 3 for v in drawn)  # colours, not grey
+    x = layout.features({"alpha": np.array([0.05, 0.4]), "specular_reflectance": np.array([[0.3, 1, 0.65]] * 2)}, 1)
+    assert np.allclose(x, [[0.0, 1.0], [1.0, 1.0]])
+
+
+def test_channels_mode_makes_three_dimensions():
+    axes = {"a": Axis(range=(0, 1), steps=2), "c": Axis(range=(0, 1), steps=3, mode="channels")}
+    layout = Layout(axes, {"a": "scalar", "c": "rgb"})
+    assert [d.label for d in layout.dims] == ["a", "c.r", "c.g", "c.b"] and not layout.separable
+    assert len(layout.grid()) == 2 * 27
+
+
+@pytest.mark.parametrize("change, words", [
+    ({"axes": {"alpha": {"range": [0, 0.4], "steps": 4, "scale": "log"}}}, ["axes.alpha", "above 0"]),
+    ({"axes": {"alpha": {"range": [0.4, 0.1], "steps": 4}}}, ["axes.alpha", "lower first"]),
+    ({"axes": {"eta": {"range": [0.5, 2], "steps": 3}}}, ["axes.eta", "also given in source.params"]),
+    ({"kind": "sweep"}, ["kind"]),
+])
+def test_spec_errors_name_the_field(tmp_path, change, words):
+    with pytest.raises(ConfigError) as e:
+        load_table_spec(_spec(tmp_path, **change))
+    for w in words:
+        assert w in str(e.value)
+
+
+@pytest.mark.parametrize("change, words", [
+    ({"axes": {"material": {"range": [0, 1], "steps": 2}}}, ["axes.material", "a choice"]),
+    ({"axes": {"alpha": {"range": [0.05, 2.0], "steps": 2}}}, ["axes.alpha.range", "bounds"]),
+    ({"axes": {"alpha_u": {"range": [0.05, 0.5], "steps": 2}}}, ["axes.alpha_u", "does nothing"]),
+    ({"axes": {"alpha": {"range": [0.05, 0.5], "steps": 2, "mode": "channels"}}}, ["axes.alpha.mode"]),
+    ({"axes": {"roughness": {"range": [0.05, 0.5], "steps": 2}}}, ["axes.roughness", "no parameter"]),
+    ({"target": {"adapter": "cycles", "model": "principled"}}, ["target.fix", "distribution"]),
+])
+def test_plan_checks_the_spec_against_the_models_before_any_render(tmp_path, change, words):
+    spec = load_table_spec(_spec(tmp_path, **change))
+    with pytest.raises(ConfigError) as e:
+        plan(spec, "spec.yaml", collect_adapters())
+    for w in words:
+        assert w in str(e.value), str(e.value)
+
+
+def _quadratic_grid(shape=(5, 4), holes=()):
+    idx = np.array(np.meshgrid(*[np.arange(n) for n in shape], indexing="ij")).reshape(len(shape), -1).T
+    x = idx / (np.array(shape) - 1)
+    y = 0.3 + 0.2 * x[:, 0] + 0.1 * x[:, 1] ** 2 - 0.05 * x[:, 0] * x[:, 1]
+    used = np.ones(len(y), bool)
+    used[list(holes)] = False
+    return Grid(x, idx, y, used, shape)
+
+
+def test_each_map_follows_a_smooth_function_and_cv_picks_the_right_degree():
+    grid = _quadratic_grid()
+    rng = np.random.default_rng(0)
+    xs = rng.random((50, 2))
+    truth = 0.3 + 0.2 * xs[:, 0] + 0.1 * xs[:, 1] ** 2 - 0.05 * xs[:, 0] * xs[:, 1]
+    for method, tol in (("multilinear", 0.01), ("polynomial", 1e-6), ("rbf", 0.01)):
+        h, err = choose_hyperparameter(method, grid)
+        assert np.abs(build(method, grid, h).predict(xs) - truth).max() < tol, method
+        assert math.isfinite(err)
+    assert choose_hyperparameter("polynomial", grid)[0] == 2
+    # Multilinear interpolation is exact at the nodes, and a hole is filled from its neighbours.
+    holed = _quadratic_grid(holes=(7,))
+    m = Multilinear(holed)
+    assert m.predict(holed.x[[0, 19]]) == pytest.approx(holed.y[[0, 19]])
+    assert abs(m.predict(holed.x[[7]])[0] - holed.y[7]) < 0.02
+    assert m.predict(np.array([[-1.0, 2.0]]))[0] == pytest.approx(m.predict(np.array([[0.0, 1.0]]))[0])
+
+
+def test_the_map_applies_per_channel_and_leaves_out_what_it_must(tmp_path):
+    table = synthetic_table(tmp_path)
+    assert [o.label for o in table.outputs] == ["specular_reflectance", "alpha", "error"]
+    tmap = TableMap(table, "polynomial")
+    params, expected = tmap.params({"alpha": 0.2, "specular_reflectance": [0.4, 0.7, 0.95]})
+    assert params["specular_reflectance"] == pytest.approx([0.36, 0.63, 0.855], abs=0.01)  # each channel its own
+    assert params["alpha"] == pytest.approx(0.22, rel=0.02)  # the left-out point's 0.9 is not followed
+    assert expected == pytest.approx(0.03, rel=0.1)
+    assert params["variant"] == "balanced" and params["diffuse_reflectance"] == (0.0, 0.0, 0.0)
+    # Vectorised: every texel of a texture at once.
+    many = tmap.predict({"alpha": np.full(1000, 0.2), "specular_reflectance": np.tile([0.4, 0.7, 0.95], (1000, 1))})
+    assert many["specular_reflectance"].shape == (1000, 3) and many["alpha"].shape == (1000,)
+    assert outside(table, {"alpha": 0.6, "specular_reflectance": [0.5, 0.5, 0.5]}) == [
+        "alpha 0.6 above the table's range [0.05, 0.4]"]
+    assert outside(table, {"alpha": 0.2, "specular_reflectance": [0.5, 0.5, 0.5]}) == []
+
+
+def test_a_table_file_is_versioned_and_an_edited_one_refused(tmp_path):
+    table = synthetic_table(tmp_path)
+    path = write_table(tmp_path / "table.json", table)
+    again = read_table(tmp_path)
+    assert again.digest == table.digest and TableMap(again).params({"alpha": 0.1, "specular_reflectance": [1, 1, 1]})
+    doc = json.loads(path.read_text())
+    doc["points"][0]["params"]["alpha"] = 0.5
+    path.write_text(json.dumps(doc))
+    with pytest.raises(ConfigError, match="edited after it was built"):
+        read_table(path)
+    doc["schema_version"] = TABLE_SCHEMA_VERSION + 1
+    path.write_text(json.dumps(doc))
+    with pytest.raises(ConfigError, match="upgrade brdf-remap"):
+        read_table(path)
+    path.write_text(json.dumps({"schema_version": 3, "key": "x"}))
+    with pytest.raises(ConfigError, match="not a remap table"):
+        read_table(path)
+
+
+def test_a_lookup_checks_the_material_against_the_table(tmp_path):
+    table = synthetic_table(tmp_path)
+    from brdfremap.adapters.mitsuba.models import MODELS
+
+    spec = MODELS["roughconductor"]
+    good = Material(adapter="mitsuba", model="roughconductor",
+                    params={"distribution": "beckmann", "eta": 0, "k": 1, "alpha": 0.1,
+                            "specular_reflectance": [0.5, 0.6, 0.7]})
+    values = axis_values(table, good, spec, "m.yaml")
+    assert values == {"alpha": 0.1, "specular_reflectance": [0.5, 0.6, 0.7]}
+    answer = look_up(table, TableMap(table), values)
+    assert answer.lookup.digest == table.digest and answer.seconds < 0.05
+    for params, field in (({**good.params, "distribution": "ggx"}, "params.distribution"),
+                          ({**good.params, "material": "Au"}, "params.material"),
+                          ({**good.params, "eta": 0.2}, "params.eta")):
+        with pytest.raises(ConfigError) as e:
+            axis_values(table, good.model_copy(update={"params": params}), spec, "m.yaml")
+        assert field in str(e.value) and "was built for" in str(e.value)
+    with pytest.raises(ConfigError, match="maps mitsuba:roughconductor"):
+        axis_values(table, Material(adapter="mitsuba", model="ward"), MODELS["ward"], "m.yaml")
+
+
+def test_choice_prefers_the_lookups_closest_to_direct_fits():
+    c = {"multilinear": Candidate(method="multilinear", hyper={}, cv_rms={"a": 0.01}, median_ratio=1.02,
+                                  p95_ratio=1.3, ratios=[1.0]),
+         "polynomial": Candidate(method="polynomial", hyper={}, cv_rms={"a": 0.05}, median_ratio=1.01,
+                                 p95_ratio=1.1, ratios=[1.0]),
+         "rbf": Candidate(method="rbf", hyper={}, cv_rms={"a": 0.02}, median_ratio=1.2, p95_ratio=1.2, ratios=[1.0])}
+    assert choose(c)[0] == "polynomial"
+    blind = {m: x.model_copy(update={"median_ratio": None, "p95_ratio": None}) for m, x in c.items()}
+    assert choose(blind)[0] == "multilinear"
+
+
+def test_schema_lists_the_table_formats():
+    from brdfremap.core.plugins import collect_schemas
+
+    known = collect_schemas()
+    assert known["table"] is Table and known["table-spec"] is TableSpec
