@@ -128,6 +128,10 @@ def resolve(job: Job, registry: AdapterRegistry, where: Where = Where()) -> Reso
     named, never given as files here: a data file must not choose a program to run."""
     src = job.source
     src_spec = model_of(registry, src.adapter, src.model, where.source_file, where.source_prefix)
+    if src.textures and job.lookup is None:
+        raise ConfigError(f"drives {', '.join(sorted(src.textures))} by images: a fit remaps one uniform material; "
+                          "remap a textured one texel by texel through a table (--table TABLE, built with `remap "
+                          "table build`)", file=where.source_file, field="textures")
     src_params = src_spec.complete(src.params, file=where.source_file, prefix=where.params_prefix)
     tgt = job.target
     tgt_spec = model_of(registry, tgt.adapter, tgt.model, where.target_file, where.target_prefix)

@@ -241,9 +241,16 @@ class Material(_Strict):
 
 
 def load_material(path: str | Path) -> Material:
+    """A material file; its textures' files are relative to it, and are read (hashed) here."""
     from .configio import load_yaml_model
+    from .textures import texture
 
-    return load_yaml_model(path, Material, "a material")
+    m = load_yaml_model(path, Material, "a material")
+    if not m.textures:
+        return m
+    here = Path(path).resolve().parent
+    return m.model_copy(update={"textures": {
+        k: texture(here / t.file, t.colorspace, t.filter, where=f"{path}: textures.{k}") for k, t in m.textures.items()}})
 
 
 def short(value: Any, n: int = 80) -> str:

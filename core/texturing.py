@@ -21,8 +21,9 @@ from .protocol import Adapter, check_image
 from .scene import ProbeScene
 from .textures import Texture, TextureMap, encode, kind_of_file
 
-CHECK_SPP = 4
-"""The textured check renders at this many times the scene's samples (each side twice, for its noise)."""
+CHECK_RESOLUTION, CHECK_SPP = 128, 64
+"""The textured check's least resolution and samples (each side twice, for its noise); under the
+studio environment four times the samples (every direction lights each pixel)."""
 
 
 class MapRecord(Strict):
@@ -36,6 +37,8 @@ class MapRecord(Strict):
 class TexturedCheck(Strict):
     """The textured source and the textured result on the probe sphere, each by its own renderer."""
 
+    condition: str = Field(description="scene (the job's lights: where the highlight runs over the texture) or "
+                                       "environment (the studio: every texel lit).")
     resolution: int
     spp: int
     error: float = Field(description="Relative RMSE of the textured result against the textured source.")
@@ -54,13 +57,15 @@ class Textured(Strict):
     maps: list[MapRecord] = Field(description="The target's maps, written beside the native material.")
     constants: dict[str, Any] = Field(default_factory=dict, description="Target parameters uniform over the "
                                                                         "texture (written as numbers).")
+    values: dict[str, Any] = Field(default_factory=dict, description="The native material's numbers: the lookup's, "
+                                                                    "with the constants and the held means.")
     held: dict[str, str] = Field(default_factory=dict, description="Target parameters that vary over the texture "
                                                                    "but the target takes only as a number: their "
                                                                    "mean is written, and why.")
     outside: list[str] = Field(default_factory=list, description="Texel values outside the table's range (clamped).")
     notes: list[str] = Field(default_factory=list)
     seconds: float = Field(description="The texel-by-texel remap (reading and writing the images aside).")
-    check: TexturedCheck | None = None
+    checks: list[TexturedCheck] = Field(default_factory=list, description="The textured check under each condition.")
     check_skipped: str = Field("", description="Why the textured check was not rendered.")
 
 
@@ -73,10 +78,12 @@ class Texturing:
     params: dict[str, Any]
     """The native material's numbers: the fit's, with the constants and held means."""
     images: tuple[np.ndarray, np.ndarray] | None = None
+    """The textured source and result under the studio environment (the check's images)."""
 
 
-def texture_result(resolved, source: Adapter, target: Adapter, params: dict[str, Any]) -> Texturing:
-    """Remap the job's textures through its table, and render the textured check."""
+def texture_result(resolved, source: Adapter | None, target: Adapter, params: dict[str, Any]) -> Texturing:
+    """Remap the job's textures through its table, and render the textured check (not without a
+    ``source`` adapter: `remap --table --no-render`)."""
     from .tables import TableMap, read_table
     from .tables.texels import read_inputs, remap_texels
 
@@ -104,11 +111,17 @@ def texture_result(resolved, source: Adapter, target: Adapter, params: dict[str,
         records.append(MapRecord(param=name, file=fname, colorspace=space, low=float(values.min()),
                                  high=float(values.max())))
     seconds = time.perf_counter() - t0
-    check, skipped, images = _check(resolved, source, target, inputs, maps, native_params, filt)
+    checks, skipped, images = ([], "not rendered (--no-render)", None) if source is None else \
+        _check(resolved, source, target, inputs, maps, native_params, filt)
     record = Textured(table=table.name, inputs={n: t.file for n, t in job.source.textures.items()},
-                      width=inputs.width, height=inputs.height, maps=records, constants=out.constants, held=held,
-                      outside=out.outside, notes=inputs.notes, seconds=seconds, check=check, check_skipped=skipped)
+                      width=inputs.width, height=inputs.height, maps=records, constants=out.constants,
+                      values=_plain(spec.active(native_params)), held=held,
+                      outside=out.outside, notes=inputs.notes, seconds=seconds, checks=checks, check_skipped=skipped)
     return Texturing(record, files, native, native_params, images)
+
+
+def _plain(params: dict[str, Any]) -> dict[str, Any]:
+    return {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()}
 
 
 def _mean(values: np.ndarray) -> Any:
@@ -118,28 +131,40 @@ def _mean(values: np.ndarray) -> Any:
 
 def _check(resolved, source: Adapter, target: Adapter, inputs, maps: dict[str, np.ndarray],
            params: dict[str, Any], filt: str):
-    """Both textured materials on the probe sphere, each side twice (its noise)."""
+    """Both textured materials on the probe sphere under the job's lights and under the studio
+    environment, each side twice (its noise)."""
+    from .scene import EnvironmentLight
+
     job = resolved.job
     why = _cannot_check(resolved, source, target)
     if why:
-        return None, why, None
-    scene: ProbeScene = job.scene.with_(spp=job.scene.spp * CHECK_SPP)
+        return [], why, None
+    first = job.scene.view_scenes()[0]
+    spp = max(CHECK_SPP, job.scene.spp * 4)
+    base = first.with_(resolution=max(CHECK_RESOLUTION, first.resolution), spp=spp)
+    studio = base.model_copy(update={"lights": [EnvironmentLight(type="environment", map="studio")],
+                                     "spp": 4 * spp, "name": "textured check: studio"})
     src_maps = {n: TextureMap(inputs.source_maps[n], t.filter) for n, t in job.source.textures.items()}
     tgt_maps = {n: TextureMap(v, filt) for n, v in maps.items()}
-    src_params = resolved.source_params
-    renders = []
-    for adapter, model, p, m, who in ((source, job.source.model, src_params, src_maps, "source"),
-                                      (target, job.target.model, params, tgt_maps, "target")):
-        pair = [check_image(adapter.render_textured(model, dict(p), m, sc), sc, f"{who} textured")
-                for sc in (scene, scene.with_(seed=scene.seed + 1))]
-        renders.append(pair)
-    (s1, s2), (t1, t2) = renders
-    src, tgt = (s1 + s2) / 2, (t1 + t2) / 2
-    floor = float(np.hypot(relative_rmse(s1, s2), relative_rmse(t1, t2)) / 2)
-    err = relative_rmse(src, tgt)
-    check = TexturedCheck(resolution=scene.resolution, spp=scene.spp * 2, error=err,
-                          perceptual=delta_e_itp(src, tgt), noise_floor=floor, beyond_noise=beyond_noise(err, floor))
-    return check, "", (src, tgt)
+    checks, images = [], None
+    for condition, scene in (("scene", base), ("environment", studio)):
+        if source.scene_problem(scene) or target.scene_problem(scene):
+            continue
+        src, src_noise = _pair(source, job.source.model, resolved.source_params, src_maps, scene, 0, "source")
+        tgt, tgt_noise = _pair(target, job.target.model, params, tgt_maps, scene, 2, "target")
+        err, floor = relative_rmse(src, tgt), float(np.hypot(src_noise, tgt_noise))
+        checks.append(TexturedCheck(condition=condition, resolution=scene.resolution, spp=2 * scene.spp, error=err,
+                                    perceptual=delta_e_itp(src, tgt), noise_floor=floor,
+                                    beyond_noise=beyond_noise(err, floor)))
+        images = (src, tgt)
+    return checks, "", images
+
+
+def _pair(adapter: Adapter, model: str, params, maps, scene: ProbeScene, offset: int, who: str):
+    """The mean of two renders at other seeds, and its noise (their difference / 2)."""
+    a, b = (check_image(adapter.render_textured(model, dict(params), maps, sc), sc, f"{who} textured")
+            for sc in (scene.with_(seed=scene.seed + offset), scene.with_(seed=scene.seed + offset + 1)))
+    return (a + b) / 2, relative_rmse(a, b) / 2
 
 
 def _cannot_check(resolved, source: Adapter, target: Adapter) -> str:

@@ -26,7 +26,8 @@ def read_materials(bpy) -> list[dict]:
 
 
 def _material(bpy, mat, defaults) -> dict:
-    entry = {"name": mat.name, "model": None, "params": {}, "problem": "", "textured": [], "notes": []}
+    entry = {"name": mat.name, "model": None, "params": {}, "problem": "", "textured": [], "notes": [],
+             "textures": {}}
     tree = mat.node_tree if mat.use_nodes else None
     outputs = [n for n in tree.nodes if n.type == "OUTPUT_MATERIAL"] if tree else []
     output = next((n for n in outputs if n.is_active_output), outputs[0] if outputs else None)
@@ -50,6 +51,11 @@ def _material(bpy, mat, defaults) -> dict:
         socket = input_socket(node, sock)
         if socket.is_linked:
             entry["textured"].append(f"{pname} <- {_source(socket.links[0].from_node)}")
+            tex, why = _image(bpy, socket.links[0])
+            if tex is not None:
+                entry["textures"][pname] = tex
+            else:
+                entry["notes"].append(f"{pname}: {why}: read as its constant")
         entry["params"][pname] = _plain(socket.default_value)
     mapped = set(inputs.values())
     base = defaults.setdefault(node.bl_idname, _defaults(bpy, node.bl_idname))
@@ -64,6 +70,32 @@ def _material(bpy, mat, defaults) -> dict:
             entry["notes"].append(f"{socket.name} = {_shown(socket.default_value)} has no counterpart in the "
                                   f"{model!r} model: ignored")
     return entry
+
+
+LINEAR_SPACES = {"Non-Color", "Linear Rec.709", "Raw", "Linear"}
+
+
+def _image(bpy, link) -> tuple[dict | None, str]:
+    """An Image Texture node's file, colour space and interpolation, when its Color drives the input
+    directly from the mesh's UV map and a file of its own; else None and why not."""
+    node = link.from_node
+    if node.type != "TEX_IMAGE" or node.image is None:
+        return None, f"driven by a {node.bl_label} node, not an image"
+    image = node.image
+    if link.from_socket.name != "Color":
+        return None, f"driven by the {link.from_socket.name} of image {image.name!r}"
+    if node.inputs["Vector"].is_linked:
+        return None, f"image {image.name!r} is read through a coordinate node graph, not the UV map as it is"
+    if node.projection != "FLAT" or image.source != "FILE":
+        return None, f"image {image.name!r} is not a flat image file ({node.projection.lower()}, {image.source.lower()})"
+    if image.packed_file is not None:
+        return None, f"image {image.name!r} is packed in the .blend: unpack it (File > External Data > Unpack)"
+    space = image.colorspace_settings.name
+    if space != "sRGB" and space not in LINEAR_SPACES:
+        return None, f"image {image.name!r} is in colour space {space!r} (sRGB or Non-Color are read)"
+    path = bpy.path.abspath(image.filepath, library=image.library)
+    return {"file": path, "colorspace": "srgb" if space == "sRGB" else "linear",
+            "filter": "nearest" if node.interpolation == "Closest" else "linear"}, ""
 
 
 def _defaults(bpy, idname: str) -> dict[str, object]:

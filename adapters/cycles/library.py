@@ -11,8 +11,10 @@ from brdfremap.core.atomic import temp_beside, write_text_atomic
 from brdfremap.core.errors import ConfigError, RenderError
 from brdfremap.core.library.formats import Converted, Entry, clip_into
 from brdfremap.core.schemas import Material
+from brdfremap.core.textures import texture
 from brdfremap.core.workerproc import JsonLinesWorker
 
+from .adapter import texture_request
 from .material import python_snippet
 from .models import MODELS
 
@@ -60,8 +62,15 @@ def _entry(m: dict, file: str) -> Entry:
         notes = clip_into(MODELS[m["model"]], params) + m["notes"]
     except ConfigError as exc:
         return Entry(name=m["name"], file=file, problem=str(exc), notes=m["notes"])
+    textures = {}
+    for pname, t in m.get("textures", {}).items():
+        if Path(t["file"]).is_file():
+            textures[pname] = texture(t["file"], t["colorspace"], t["filter"], where=f"{m['name']}: {pname}")
+        else:
+            notes.append(f"{pname}: its image {t['file']} is not found: read as its constant")
     return Entry(name=m["name"], file=file, notes=notes, textured=m["textured"],
-                 material=Material(adapter="cycles", model=m["model"], params=params, name=m["name"]))
+                 material=Material(adapter="cycles", model=m["model"], params=params, name=m["name"],
+                                   textures=textures))
 
 
 class BlendLibraryWriter:
@@ -72,7 +81,7 @@ class BlendLibraryWriter:
     def write(self, folder: Path, items: list[Converted]) -> list[Path]:
         blend = Path(folder) / "library.blend"
         tmp = temp_beside(blend)
-        payload = [{"name": i.name, "model": i.model,
+        payload = [{"name": i.name, "model": i.model, "textures": texture_request(folder, i.textures),
                     "params": {k: list(v) if isinstance(v, tuple) else v for k, v in
                                MODELS[i.model].complete(i.params).items()}} for i in items]
         worker = _worker("writing library.blend")
@@ -82,5 +91,6 @@ class BlendLibraryWriter:
         finally:
             worker.close()
             tmp.unlink(missing_ok=True)
-        script = "\n\n".join(python_snippet(i.model, MODELS[i.model].complete(i.params), i.name) for i in items)
+        script = "\n\n".join(python_snippet(i.model, MODELS[i.model].complete(i.params), i.name, i.textures)
+                               for i in items)
         return [blend, write_text_atomic(Path(folder) / "library.py", script)]

@@ -62,3 +62,10 @@ def open_pbr_inputs(params: dict) -> dict[str, object]:
             "fuzz_roughness": params["sheen_roughness"], "specular_roughness_anisotropy": 0.9 * params["anisotropic"],
             "transmission_weight": params["transmission_weight"], "subsurface_weight": params["subsurface_weight"],
             "base_diffuse_roughness": params["diffuse_roughness"]}
+
+
+DIRECT = {"base_color": "base_color", "metallic": "base_metalness", "roughness": "specular_roughness",
+          "ior": "specular_ior", "specular_tint": "specular_color", "coat_weight": "coat_weight",
+          "coat_roughness": "coat_roughness", "transmission_weight": "transmission_weight"}
+"""Principled parameters that are one open_pbr_surface input as they are (an image can drive it
+directly; base_weight stays 1)."""

@@ -64,8 +64,10 @@ class MaterialXReader:
                                                         f"{', '.join(TO_PRINCIPLED)})")
         params, textured, notes = _principled(shader, category)
         notes.insert(0, NOTE.format(shader=category))
+        textures = _textures(shader, category, name, notes)
         return Entry(name=name, file=file, notes=notes, textured=textured,
-                     material=Material(adapter="cycles", model="principled", params=params, name=name))
+                     material=Material(adapter="cycles", model="principled", params=params, name=name,
+                                       textures=textures))
 
 
 def _principled(shader, category: str) -> tuple[dict, list[str], list[str]]:
@@ -95,6 +97,59 @@ def _principled(shader, category: str) -> tuple[dict, list[str], list[str]]:
         params[pname] = v / 2.0 if pname in HALF else v * SCALE[pname] if pname in SCALE else v
     notes = clip_into(PRINCIPLED, params) + _unused(shader, nodedef, used)
     return params, textured, notes
+
+
+SRGB_SPACES = {"srgb_texture", "srgb_tx", "sRGB"}
+LINEAR_SPACES = {"", "lin_rec709", "raw", "Raw", "linear", "lin_srgb", "scene-linear Rec.709-sRGB"}
+
+
+def _textures(shader, category: str, name: str, notes: list[str]) -> dict:
+    """The inputs an `image` or `tiledimage` node drives directly (default texture coordinates, no
+    tiling), each of a Principled parameter that is that one input as it is, as textures."""
+    from brdfremap.core.textures import texture
+
+    out = {}
+    for pname, inputs in TO_PRINCIPLED[category].items():
+        inp = shader.getInput(inputs[0])
+        node = inp.getConnectedNode() if inp is not None else None
+        if node is None or node.getCategory() not in ("image", "tiledimage"):
+            continue
+        why = _unusable(shader, node, pname, inputs)
+        f = node.getInput("file")
+        path = Path(f.getResolvedValueString()) if f is not None and not why else None
+        if path is not None and not path.is_absolute():
+            path = Path(shader.getDocument().getSourceUri()).parent / path
+        if path is not None and not path.is_file():
+            why = f"its image {f.getValueString()!r} is not found"
+        space = f.getActiveColorSpace() if f is not None else ""
+        if not why and space not in SRGB_SPACES | LINEAR_SPACES:
+            why = f"its image is in colour space {space!r} (srgb_texture or lin_rec709 are read)"
+        if why:
+            notes.append(f"{pname}: {why}: read as its constant")
+            continue
+        filt = node.getInput("filtertype")
+        out[pname] = texture(path, "srgb" if space in SRGB_SPACES else "linear",
+                             "nearest" if filt is not None and filt.getValueString() == "closest" else "linear",
+                             where=f"{name}: {pname}")
+    return out
+
+
+def _unusable(shader, node, pname: str, inputs: tuple[str, ...]) -> str:
+    if len(inputs) > 1:
+        weight = shader.getInput(inputs[1])
+        if weight is not None and (weight.getConnectedNode() is not None or
+                                   (weight.hasValueString() and abs(float(weight.getValue()) - 1.0) > 1e-6)):
+            return f"its image is scaled by {inputs[1]} (only an image read as it is is remapped texel by texel)"
+    if pname in HALF or pname in SCALE:
+        return "its image is scaled into the Principled value (only an image read as it is is remapped)"
+    tc = node.getInput("texcoord")
+    if tc is not None and (tc.getConnectedNode() is not None or tc.hasNodeGraphString()):
+        return "its image is read through other texture coordinates"
+    if node.getCategory() == "tiledimage":
+        tiles = node.getInput("uvtiling")
+        if tiles is not None and tiles.hasValueString() and tiles.getValueString().replace(" ", "") not in ("1,1",):
+            return "its image is tiled"
+    return ""
 
 
 def _r(x) -> float:

@@ -10,8 +10,26 @@ from brdfremap.core.atomic import write_text_atomic
 from brdfremap.core.errors import RenderError
 from brdfremap.core.library.formats import Converted
 
-from .correspondence import open_pbr_inputs
+from .correspondence import DIRECT, open_pbr_inputs
 from .reader import mx, standard_libraries
+
+
+def _image(m, doc, shader, name: str, pname: str, tex) -> None:
+    """An `image` node reading a map (its file relative to the document) into the shader input that
+    takes the parameter as it is; an input the correspondence scales (Specular IOR Level) keeps its number."""
+    target = DIRECT.get(pname)
+    if target is None:
+        return
+    kind = "color3" if pname in ("base_color", "specular_tint") else "float"
+    node = doc.addNode("image", doc.createValidChildName(f"{name}_{pname}"), kind)
+    f = node.addInput("file", "filename")
+    f.setValueString(tex.file)
+    f.setColorSpace("srgb_texture" if tex.colorspace == "srgb" else "lin_rec709")
+    if tex.filter == "nearest":
+        node.setInputValue("filtertype", "closest")
+    inp = shader.getInput(target) or shader.addInput(target, kind)
+    inp.removeAttribute("value")
+    inp.setConnectedNode(node)
 
 
 class MaterialXWriter:
@@ -33,6 +51,8 @@ class MaterialXWriter:
             shader = doc.addNode("open_pbr_surface", doc.createValidChildName(f"{name}_shader"), "surfaceshader")
             for key, v in open_pbr_inputs(params).items():
                 shader.setInputValue(key, m.Color3(*v) if isinstance(v, tuple) else float(v))
+            for pname, tex in sorted(item.textures.items()):
+                _image(m, doc, shader, name, pname, tex)
             material = doc.addMaterialNode(name, shader)
             material.setDocString(f"source material: {item.name}")
         check = m.createDocument()

@@ -17,6 +17,7 @@ from pathlib import Path
 from brdfremap.core.errors import ConfigError
 from brdfremap.core.library.formats import Entry, clip_into
 from brdfremap.core.schemas import Material
+from brdfremap.core.textures import Texture, texture
 
 from .blend import COMPONENTS, SLOTS
 from .models import MODELS
@@ -132,13 +133,14 @@ def _entry(doc: _Document, elem: ET.Element, name: str, file: str) -> Entry:
         why = f"{NOT_YET[kind]} ({kind}) is not supported yet" if kind in NOT_YET else \
             f"Mitsuba BSDF type {kind!r} has no model here (models: {', '.join(sorted(MODELS))})"
         return Entry(name=name, file=file, problem=why, notes=notes)
+    textures: dict[str, Texture] = {}
     try:
         params, textured = _blend_params(doc, elem, notes) if model == "blendbsdf" else \
-            _params(doc, elem, model, notes)
+            _params(doc, elem, model, notes, textures)
     except ConfigError as exc:
         return Entry(name=name, file=file, problem=str(exc), notes=notes)
-    return Entry(name=name, file=file, material=Material(adapter="mitsuba", model=model, params=params, name=name),
-                 notes=notes, textured=textured)
+    material = Material(adapter="mitsuba", model=model, params=params, name=name, textures=textures)
+    return Entry(name=name, file=file, material=material, notes=notes, textured=textured)
 
 
 def _unwrap(doc: _Document, elem: ET.Element, notes: list[str]) -> ET.Element:
@@ -156,8 +158,10 @@ def _unwrap(doc: _Document, elem: ET.Element, notes: list[str]) -> ET.Element:
     return elem
 
 
-def _params(doc: _Document, elem: ET.Element, model: str, notes: list[str]) -> tuple[dict, list[str]]:
-    """The model's parameters from the BSDF's properties (Mitsuba's defaults for the rest)."""
+def _params(doc: _Document, elem: ET.Element, model: str, notes: list[str],
+            textures: dict | None = None) -> tuple[dict, list[str]]:
+    """The model's parameters from the BSDF's properties (Mitsuba's defaults for the rest); a
+    `bitmap` on an input the model takes as an image into ``textures`` (when given)."""
     spec = MODELS[model]
     params: dict = {}
     textured: list[str] = []
@@ -166,6 +170,9 @@ def _params(doc: _Document, elem: ET.Element, model: str, notes: list[str]) -> t
         name = prop.get("name", "")
         if prop.tag in ("texture", "ref"):
             textured.append(_texture(doc, prop, name))
+            tex = _bitmap(doc, prop, name, notes) if textures is not None and name in spec.texturable else None
+            if tex is not None:
+                textures[name] = tex
             continue
         value = _value(prop)
         if name in ("alpha_u", "alpha_v"):
@@ -250,6 +257,29 @@ def _texture(doc: _Document, prop: ET.Element, name: str) -> str:
     file = next((s.get("value") for s in tex.iter("string") if s.get("name") == "filename"), None)
     what = f"{tex.get('type', 'texture')} {file!r}" if file else tex.get("type", "texture")
     return f"{name} <- {what}"
+
+
+LINEAR_FILES = (".exr", ".hdr", ".pfm")
+"""Image files Mitsuba reads as linear values; it decodes the others (PNG, JPEG...) as sRGB unless `raw`."""
+
+
+def _bitmap(doc: _Document, prop: ET.Element, name: str, notes: list[str]) -> Texture | None:
+    """A `bitmap` texture's file (relative to the scene's folder, as Mitsuba resolves it), how its
+    values are read and filtered; None (and a note) for another texture or a file not found."""
+    tex = doc.ref(prop) if prop.tag == "ref" else prop
+    strings = {s.get("name"): s.get("value", "") for s in tex.iter("string")}
+    if tex.get("type") != "bitmap" or not strings.get("filename"):
+        notes.append(f"{name}: a {tex.get('type', 'texture')} texture is read as its constant (only a bitmap's "
+                     "image is remapped texel by texel)")
+        return None
+    path = (doc.path.parent / strings["filename"]).resolve()
+    if not path.is_file():
+        notes.append(f"{name}: its image {strings['filename']!r} is not found beside the scene: read as its constant")
+        return None
+    raw = any(b.get("name") == "raw" and b.get("value", "").strip().lower() in ("true", "1") for b in tex.iter("boolean"))
+    space = "linear" if raw or path.suffix.lower() in LINEAR_FILES else "srgb"
+    filt = "nearest" if strings.get("filter_type") == "nearest" else "linear"
+    return texture(path, space, filt, where=f"{name} of a BSDF in {doc.path}")
 
 
 def _named_ior(text: str) -> float:

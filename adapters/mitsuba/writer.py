@@ -30,7 +30,7 @@ class MitsubaLibraryWriter:
         lines.append('<scene version="3.0.0">')
         for item in items:
             params = MODELS[item.model].complete(item.params)
-            body = bsdf_xml(item.model, params).strip().splitlines()
+            body = bsdf_xml(item.model, params, textures=item.textures).strip().splitlines()
             body[0] = body[0].replace("<bsdf ", f"<bsdf id={quoteattr(item.name)} ", 1)
             lines += ["    " + line for line in body]
         lines.append("</scene>")

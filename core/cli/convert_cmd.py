@@ -20,6 +20,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     p.add_argument("--only", action="append", default=[], metavar="NAME",
                    help="convert only the materials of this name (repeatable)")
+    p.add_argument("--table", action="append", default=[], metavar="TABLE",
+                   help="a remap table (`remap table build`) through which textured materials of its source model "
+                        "are remapped texel by texel (repeatable; without one, a texture's constant is used)")
     options.add_scene(p)
     options.add_settings(p)
     options.add_workers(p)
@@ -47,11 +50,23 @@ def run(args: argparse.Namespace) -> int:
                               f"{', '.join(e.name for e in entries[:12])}{' …' if len(entries) > 12 else ''})",
                               field="--only")
         entries = [e for e in entries if e.name in args.only]
+    tables = [_table(t) for t in args.table]
     with workers(args.jobs, args.scheduler) as w, adapter_pool(registry) as adapters:
         result = convert(entries, dest, args.out, registry, formats, w, adapters, scene=scene, settings=settings,
-                         quiet=args.quiet)
+                         quiet=args.quiet, tables=tables)
     _print(result, args.out)
     return EXIT_SOME_FAILED if result.failed else 0
+
+
+def _table(text: str):
+    from pathlib import Path
+
+    from ..library.convert import TableUse
+    from ..tables import TableMap, read_table
+
+    table = read_table(text)
+    path = Path(text)
+    return TableUse(str((path if path.suffix == ".json" else path / "table.json").resolve()), table, TableMap(table))
 
 
 def _print(result, out) -> None:

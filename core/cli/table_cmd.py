@@ -93,6 +93,7 @@ def lookup(args: argparse.Namespace) -> int:
     from ..store import Store, owned
     from ..tables import TableMap, read_table
     from ..tables.lookup import axis_values, look_up, write_answer
+    from ..tables.texels import mean_values, read_inputs
     from .remap_cmd import print_report
 
     t0 = time.perf_counter()
@@ -105,9 +106,13 @@ def lookup(args: argparse.Namespace) -> int:
             raise ConfigError(f"the table maps to {tgt.adapter}:{tgt.model}; leave it out or give {want}", field=flag)
     src_spec = model_of(registry, source.adapter, source.model, str(args.source), "")
     values = axis_values(table, source, src_spec, str(args.source))
+    if source.textures:  # the uniform material that stands for it: its textures' mean
+        values = mean_values(read_inputs(table, source, src_spec, str(args.source)))
+        source = source.model_copy(update={"params": {**source.params, **values}})
     tmap = TableMap(table)
     loaded = time.perf_counter() - t0
     answer = look_up(table, tmap, values)
+    answer.lookup = answer.lookup.model_copy(update={"file": str(_table_file(args.table))})
     job = Job(source=source, target=tgt, scene=options.scene_from(args, table.spec.scene.scene(_here(args.table))),
               settings=options.settings_from(args, table.spec.options), label=str(args.source), lookup=answer.lookup)
     resolved = resolve(job, registry, Where(source_file=str(args.source)))
@@ -136,6 +141,13 @@ def _here(table_arg: str):
 
     p = Path(table_arg)
     return (p if p.is_dir() else p.parent).resolve()
+
+
+def _table_file(table_arg: str):
+    from pathlib import Path
+
+    p = Path(table_arg)
+    return (p / "table.json" if p.is_dir() else p).resolve()
 
 
 def _print_answer(resolved, answer, folder, files) -> None:

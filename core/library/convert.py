@@ -25,6 +25,8 @@ from ..scene import ProbeScene
 from ..settings import Settings
 from ..report import read_report
 from ..store import RESULT, Store, owned
+from ..tables import Table, TableMap
+from ..textures import Texture
 from .formats import Converted, Entry, Formats
 
 
@@ -92,20 +94,73 @@ def slot_of(name: str) -> str:
     return f"{safe}-{hashlib.sha1(name.encode()).hexdigest()[:6]}"
 
 
+@dataclass(frozen=True)
+class TableUse:
+    """A remap table given to convert (`--table`), read once."""
+
+    file: str
+    table: Table
+    tmap: TableMap
+
+
 def plan(entries: list[Entry], dest: Destination, registry: AdapterRegistry, adapters: AdapterPool,
-         scene: ProbeScene, settings: Settings) -> list[Item]:
+         scene: ProbeScene, settings: Settings, tables: list[TableUse] = ()) -> list[Item]:
     """Each material's target model and job, checked before any render; what cannot be checked
-    (out of bounds, no model to choose) is that material's failure, not the run's."""
+    (out of bounds, no model to choose) is that material's failure, not the run's. A textured
+    material goes through a table that maps it (texel by texel), else converts with its constants."""
     items = []
     for e in entries:
         item = Item(e, slot_of(e.name))
         if e.material is not None:
             try:
-                _prepare(item, dest, registry, adapters, scene, settings)
+                if not (e.material.textures and _through_table(item, dest, registry, scene, settings, list(tables))):
+                    _prepare(item, dest, registry, adapters, scene, settings)
             except RemapError as exc:
                 item.failure = str(exc)
         items.append(item)
     return items
+
+
+def _through_table(item: Item, dest: Destination, registry: AdapterRegistry, scene: ProbeScene, settings: Settings,
+                   tables: list[TableUse]) -> bool:
+    """A textured material's job through the first table that maps it to the destination: a lookup
+    at its textures' mean, remapped texel by texel. False (the textures' constants are used, and
+    the material's notes say why) when no table does."""
+    from ..tables.lookup import axis_values, look_up
+    from ..tables.texels import mean_values, read_inputs
+
+    e, src = item.entry, item.entry.material
+    spec = registry.get(src.adapter).models[src.model]
+    why = [f"no --table maps {src.adapter}:{src.model} to {dest.adapter}"]
+    for use in tables:
+        t = use.table
+        if (t.spec.source.adapter, t.spec.source.model, t.spec.target.adapter) != (src.adapter, src.model,
+                                                                                   dest.adapter):
+            continue
+        if dest.model is not None and dest.model != t.spec.target.model:
+            why = [f"the table {t.name!r} maps to {t.spec.target.model}, not {dest.model}"]
+            continue
+        try:
+            axis_values(t, src, spec, e.file, prefix=f"{e.name}: params")
+            values = mean_values(read_inputs(t, src, spec, e.file))
+        except ConfigError as exc:
+            why = [f"the table {t.name!r} does not map it: {exc}"]
+            continue
+        answer = look_up(t, use.tmap, values)
+        mean = src.model_copy(update={"params": {**src.params, **values}})
+        job = Job(source=mean, target=t.spec.target, scene=scene, settings=settings, label=f"{e.file}: {e.name}",
+                  lookup=answer.lookup.model_copy(update={"file": use.file}))
+        where = Where(source_file=e.file, params_prefix=f"{e.name}: params", target_file=use.file,
+                      target_prefix="target.", fix_prefix="target.fix")
+        item.model = t.spec.target.model
+        item.why = f"textured: remapped texel by texel through the table {t.name!r}"
+        item.task = Task(item.slot, resolve(job, registry, where).job, e.name)
+        return True
+    inputs = ", ".join(sorted(src.textures))
+    item.entry = e.model_copy(update={
+        "notes": [*e.notes, f"textured inputs ({inputs}) converted with their constant values: {why[0]}"],
+        "material": src.model_copy(update={"textures": {}})})
+    return False
 
 
 def _prepare(item: Item, dest: Destination, registry: AdapterRegistry, adapters: AdapterPool, scene: ProbeScene,
@@ -132,11 +187,11 @@ def _prepare(item: Item, dest: Destination, registry: AdapterRegistry, adapters:
 
 def convert(entries: list[Entry], dest: Destination, out: str | Path, registry: AdapterRegistry, formats: Formats,
             workers: Workers, adapters: AdapterPool, *, scene: ProbeScene, settings: Settings,
-            quiet: bool = False) -> Conversion:
+            quiet: bool = False, tables: list[TableUse] = ()) -> Conversion:
     from .html import write_index
 
     t0 = time.perf_counter()
-    items = plan(entries, dest, registry, adapters, scene, settings)
+    items = plan(entries, dest, registry, adapters, scene, settings, tables)
     with owned(out) as folder:
         runnable = [i for i in items if i.task is not None]
         runner = Runner(Store(folder / "materials"), workers, renderer_files=tuple(registry.loaded_files()),
@@ -151,13 +206,32 @@ def convert(entries: list[Entry], dest: Destination, out: str | Path, registry: 
     return result
 
 
+def _converted(item: Item, folder: Path) -> Converted:
+    """A converted material for the writers; a textured one's maps copied to `textures/<slot>/`."""
+    report = item.done.report
+    here = folder / "materials" / item.slot
+    if report.textures is None:
+        return Converted(item.entry.name, item.model, dict(report.params), here)
+    maps = {}
+    for m in report.textures.maps:
+        rel = Path("textures") / item.slot / m.file
+        try:
+            (folder / rel).parent.mkdir(parents=True, exist_ok=True)
+            write_bytes_atomic(folder / rel, (here / m.file).read_bytes())
+        except OSError as exc:
+            raise ConfigError(f"cannot copy the map: {exc.strerror or exc}", file=str(folder / rel)) from None
+        filt = next(iter(item.entry.material.textures.values())).filter
+        maps[m.param] = Texture(file=rel.as_posix(), colorspace=m.colorspace, filter=filt)  # type: ignore[arg-type]
+    return Converted(item.entry.name, item.model, dict(report.textures.values), here, maps)
+
+
 def _write_libraries(result: Conversion, folder: Path, formats: Formats) -> None:
     ok = [i for i in result.items if i.done is not None and i.done.report is not None]
     models = {i.model for i in ok}
     writers = formats.writers_for(result.destination.adapter, models) or [NativeFiles(result.destination.adapter)]
+    converted = {i.slot: _converted(i, folder) for i in ok}
     for writer in writers:
-        mine = [Converted(i.entry.name, i.model, dict(i.done.report.params), folder / "materials" / i.slot)
-                for i in ok if not writer.models or i.model in writer.models]
+        mine = [converted[i.slot] for i in ok if not writer.models or i.model in writer.models]
         if not mine:
             continue
         try:

@@ -16,6 +16,7 @@ from pydantic import Field
 from ..errors import ConfigError
 from ..model import Strict
 from ..schemas import Material
+from ..textures import Texture
 
 
 class Entry(Strict):
@@ -54,6 +55,8 @@ class Converted:
     params: dict[str, Any]
     folder: Path
     """The job's result folder (its own native files are there)."""
+    textures: dict[str, Texture] = field(default_factory=dict)
+    """Parameters read from maps: each `file` relative to the library's folder (`textures/...`)."""
 
 
 class Writer(Protocol):

@@ -14,7 +14,7 @@ from ..schemas import Material, ModelSpec
 from .table import Table, TableMap, outside
 
 
-@dataclass(frozen=True)
+@dataclass
 class Answer:
     lookup: Lookup
     """The parameters, as a job carries them."""
@@ -78,11 +78,22 @@ def write_answer(folder, resolved, answer: Answer, adapter, table_file: str) -> 
     from .. import __version__
     from ..atomic import why, write_bytes_atomic, write_json_atomic
 
+    from ..texturing import texture_result
+
     job, spec = resolved.job, resolved.target_spec
     params = spec.active(resolved.base)
+    texturing = texture_result(resolved, None, adapter, dict(resolved.base)) if job.source.textures else None
     try:
         with tempfile.TemporaryDirectory(prefix="brdfremap-") as tmp:
-            made = [Path(p) for p in adapter.write_native(job.target.model, dict(resolved.base), Path(tmp))]
+            files = []
+            if texturing is None:
+                made = [Path(p) for p in adapter.write_native(job.target.model, dict(resolved.base), Path(tmp))]
+            else:
+                for name, data in texturing.files.items():
+                    (Path(tmp) / name).write_bytes(data)
+                made = [Path(tmp) / n for n in texturing.files] + [Path(p) for p in adapter.write_native(
+                    job.target.model, texturing.params, Path(tmp), textures=texturing.native)]
+                params = spec.active(texturing.params)
             files = [write_bytes_atomic(Path(folder) / p.name, p.read_bytes()) for p in made]
     except OSError as exc:
         raise ConfigError(f"cannot write the native material: {why(exc)}", file=str(folder)) from None
@@ -93,6 +104,7 @@ def write_answer(folder, resolved, answer: Answer, adapter, table_file: str) -> 
                                                                           "model": job.target.model},
            "params": {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()},
            "axis_values": answer.values, "expected_error": lk.expected_error, "outside": lk.outside,
-           "lookup_seconds": answer.seconds, "files": [p.name for p in files]}
+           "lookup_seconds": answer.seconds, "files": [p.name for p in files],
+           "textures": texturing.record.model_dump(mode="json") if texturing else None}
     files.append(write_json_atomic(Path(folder) / "lookup.json", doc))
     return files
