@@ -21,9 +21,10 @@ from .protocol import Adapter, check_image
 from .scene import ProbeScene
 from .textures import Texture, TextureMap, encode, kind_of_file
 
-CHECK_RESOLUTION, CHECK_SPP = 128, 64
-"""The textured check's least resolution and samples (each side twice, for its noise); under the
-studio environment four times the samples (every direction lights each pixel)."""
+CHECK_RESOLUTION, CHECK_SPP = 64, 32
+"""The textured check's least resolution and samples (each side twice, for its noise): the scene's
+resolution and four times its samples (128 px and 64 spp for the default probe), at least these;
+under the studio environment four times the samples (every direction lights each pixel)."""
 
 
 class MapRecord(Strict):

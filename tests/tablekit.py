@@ -56,3 +56,35 @@ def write_synthetic(tmp_path):
     folder.mkdir()
     write_table(folder / "table.json", synthetic_table(tmp_path))
     return folder
+
+
+def principled_table(tmp_path) -> Table:
+    """A table from a Fresnel-free Beckmann metal to Cycles' Principled BSDF whose 'fits' are the
+    exporters' conversion (Base Color = the reflectance, Roughness = sqrt(alpha), Metallic 1): a
+    table of the right shape for the textured path, made without a fit."""
+    from brdfremap.adapters.cycles.models import PRINCIPLED
+    from brdfremap.core.tables.build import fit_candidates
+
+    doc = json.loads(json.dumps(SPEC))
+    doc.update(name="synthetic principled", target={"adapter": "cycles", "model": "principled",
+                                                    "fix": {"distribution": "multi_ggx"}}, holdout=0)
+    path = tmp_path / "principled-spec.yaml"
+    path.write_text(yaml.safe_dump(doc))
+    spec = load_table_spec(path)
+    layout = Layout(spec.axes, {"alpha": "scalar", "specular_reflectance": "rgb"})
+    base = PRINCIPLED.complete({"distribution": "multi_ggx", "metallic": 1.0})
+    points = []
+    for i, (idx, v) in enumerate(layout.grid()):
+        params = {**{k: list(x) if isinstance(x, tuple) else x for k, x in base.items()},
+                  "base_color": list(v["specular_reflectance"]), "roughness": v["alpha"] ** 0.5}
+        points.append(PointRecord(id=f"g{i}", index=list(idx), values=v, params=params, error=0.1, verdict="mismatch",
+                                  used=True))
+    table = Table(schema_version=TABLE_SCHEMA_VERSION, tool="test", name="synthetic principled", spec=spec,
+                  source_kinds=layout.kinds, source_params={"distribution": "beckmann", "material": "none",
+                                                             "eta": [0, 0, 0], "k": [1, 1, 1]},
+                  target_params=base, versions={"mitsuba": "2", "cycles": "1"},
+                  outputs=outputs_for(PRINCIPLED, ["base_color", "metallic", "roughness"], True), points=points,
+                  holdout=[], candidates={}, chosen="polynomial", chosen_why="test",
+                  build=BuildRecord(points=12, used=12, flagged=0, left_out=0, holdout=0, renders=0, seconds=0,
+                                    wall_seconds=0, ran_in="test"))
+    return table.model_copy(update={"candidates": fit_candidates(table)})

@@ -294,6 +294,21 @@ class CyclesAdapter(Adapter):
                 except OSError:
                     pass
 
+    def render_saved(self, path: Path, name: str, scene: ProbeScene) -> np.ndarray:
+        """A material of a .blend file (a library or material.blend this tool wrote), rendered on the
+        probe mesh as Blender opens it: its textures read from the files it references."""
+        self.renders += 1
+        out = os.path.join(self.scratch, f"r{self.renders}.exr")
+        try:
+            self.worker.request({"op": "render_saved", "path": str(Path(path).resolve()), "name": name,
+                                 "scene": scene.document(), "out": out, "passes": False})
+            return read_passes(out, PASSES[:1])["Combined"]
+        finally:
+            try:
+                os.unlink(out)
+            except OSError:
+                pass
+
     def write_native(self, model: str, params: dict[str, Value], out_dir: Path,
                      textures: dict[str, Texture] | None = None) -> list[Path]:
         out_dir = Path(out_dir)

@@ -323,6 +323,27 @@ class BlenderState:
             raise RuntimeError(f"Blender did not write {req['out']}")
         return {"seconds": time.perf_counter() - t0}
 
+    def render_saved(self, req: dict) -> dict:
+        """A material of a saved .blend (a library this tool wrote), appended and rendered on the
+        probe mesh (its UV map: the material may read textures), then removed again."""
+        t0 = time.perf_counter()
+        self.setup_scene(req["scene"])
+        with self.bpy.data.libraries.load(req["path"], link=False, relative=False) as (src, dst):
+            if req["name"] not in src.materials:
+                raise KeyError(f"{req['path']} holds no material {req['name']!r} (it holds {list(src.materials)})")
+            dst.materials = [req["name"]]
+        mat = dst.materials[0]
+        missing = [n.image.filepath for n in mat.node_tree.nodes if n.type == "TEX_IMAGE" and n.image is not None
+                   and not n.image.has_data and not os.path.exists(self.bpy.path.abspath(n.image.filepath,
+                                                                                         library=n.image.library))]
+        if missing:
+            raise FileNotFoundError(f"the material's images are not found: {missing}")
+        self.probes.use(mat, True)
+        try:
+            return self._render(req, t0)
+        finally:
+            self.drop(mat)
+
     def save_blend(self, req: dict) -> dict:
         textures = req.get("textures") or {}
         if not textures:
@@ -396,6 +417,8 @@ def main() -> int:
                 result = state.render(req)
             elif op == "save_blend":
                 result = state.save_blend(req)
+            elif op == "render_saved":
+                result = state.render_saved(req)
             elif op == "save_library":
                 result = state.save_library(req)
             elif op == "read_blend":

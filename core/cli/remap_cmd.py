@@ -168,7 +168,8 @@ def print_report(r: Report, folder, resumed: bool) -> None:
                     f" + {r.source_renders} source"),
         ("seconds", f"{r.seconds:.2f}" + ("   (the stored result of this same job: --force to fit again)"
                                           if resumed else "")),
-        ("scheme", r.scheme if r.scheme == r.scheme_used else f"{r.scheme} (used {r.scheme_used})"),
+        *([] if r.job.lookup else [("scheme", r.scheme if r.scheme == r.scheme_used
+                                                 else f"{r.scheme} (used {r.scheme_used})")]),
         ("verdict", _verdict(r)),
         ("wrote", f"{folder}/ ({', '.join([f.name for f in r.files] + ['result.json'])})"),
     ]

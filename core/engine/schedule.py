@@ -107,7 +107,8 @@ def remap(target: ModelSpec, base: dict[str, Value], free: list[str], renders: R
     run.notes += list(notes)
     base = _choose(run, dict(base), list(alternatives))
     plan = plan_stages(settings.scheme, target, free, run.scene.source_lobes)
-    run.notes += plan.findings
+    if free:  # with nothing to fit, no scheme runs
+        run.notes += plan.findings
     start = _State(dict(base), *run.render_final(dict(base), "start"))
     state = _never_worse(run, start, _fit_stages(run, plan, dict(base)))
     assessment = run.assess(state)

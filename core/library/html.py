@@ -23,8 +23,10 @@ def _order(item: "Item") -> tuple:
 def _card(item: "Item") -> dict:
     rep = item.done.report if item.done is not None else None
     src = item.entry.material
+    remapped = rep is not None and rep.textures is not None
     card = {"name": item.entry.name, "file": item.entry.file, "status": item.status, "reason": item.reason,
             "model": item.model, "why": item.why, "notes": item.entry.notes, "textured": item.entry.textured,
+            "texel": remapped,
             "source": f"{src.adapter}:{src.model}" if src else "", "report": None}
     if rep is not None:
         folder = f"materials/{item.slot}"
@@ -39,8 +41,22 @@ def _card(item: "Item") -> dict:
             "held_out": [{"label": c.label, "error": c.error, "noise": c.noise_floor, "beyond": c.beyond_noise,
                           "judged": c.noise_floor <= rep.job.settings.resolve_limit} for c in rep.validation],
             "fit_scene": rep.fit_scene.why if rep.fit_scene else "",
-            "target": f"{rep.target.adapter}:{rep.target.model}"}
+            "target": f"{rep.target.adapter}:{rep.target.model}", "textures": _textures(rep, folder)}
     return card
+
+
+def _textures(rep, folder: str) -> dict | None:
+    """A textured source remapped texel by texel: its maps, the check's images and errors."""
+    t = rep.textures
+    if t is None:
+        return None
+    return {"table": t.table, "size": f"{t.width} x {t.height}",
+            "maps": [{"param": m.param, "href": f"{folder}/{m.file}", "space": m.colorspace,
+                      "range": f"{m.low:.3g} to {m.high:.3g}"} for m in t.maps],
+            "images": [f"{folder}/textured-{n}.png" for n in ("source", "target", "error")] if t.checks else [],
+            "checks": [{"condition": c.condition, "error": c.error, "noise": c.noise_floor, "de": c.perceptual,
+                        "resolution": c.resolution, "spp": c.spp} for c in t.checks],
+            "skipped": t.check_skipped, "held": list(t.held.values()), "outside": t.outside, "notes": t.notes}
 
 
 def _tuple(v):
