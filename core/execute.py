@@ -30,7 +30,7 @@ from .protocol import Adapter
 from .renders import CachedRenderer, ProbeRenders
 from .report import FileRecord, Report, build_report
 from .schemas import Value
-from .texturing import Texturing, texture_result
+from .texturing import Texturing, texture_result, textured_findings
 
 
 IMAGES = ("source.exr", "target.exr", "source.png", "target.png", "error.png")
@@ -121,11 +121,13 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
     informed = job.settings.start == "informed" and job.lookup is None
     start = informed_start(resolved, adapters) if informed else {}
     free = fitted(resolved, start) if job.lookup is None else []
-    result = remap(resolved.target_spec, {**resolved.base, **start}, free, renders, job.settings, job.tuning,
-                   progress, alternatives=alternatives(resolved, start) if informed else [],
-                   notes=lookup_notes(job))
-    texturing = texture_result(resolved, adapters[src.adapter], adapters[tgt.adapter], result.params) \
+    # A textured source is a lookup (nothing fitted): its maps and their check come first, for the verdict.
+    texturing = texture_result(resolved, adapters[src.adapter], adapters[tgt.adapter], dict(resolved.base)) \
         if src.textures else None
+    notes = lookup_notes(job) + (textured_findings(texturing.record, job.settings.threshold,
+                                                   job.settings.resolve_limit) if texturing else [])
+    result = remap(resolved.target_spec, {**resolved.base, **start}, free, renders, job.settings, job.tuning,
+                   progress, alternatives=alternatives(resolved, start) if informed else [], notes=notes)
     files = artifacts(adapters[tgt.adapter], tgt.model, result.params, renders.source_image(), result.target_image,
                       texturing)
     info = describe(adapters, list(dict.fromkeys((src.adapter, tgt.adapter))))

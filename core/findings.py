@@ -212,6 +212,42 @@ class TableLookup(_Note):
         return text
 
 
+class TexturedCondition(Strict):
+    condition: str
+    error: float
+    beyond_noise: float
+
+    def words(self) -> str:
+        where = {"scene": "the scene's lights", "environment": "the studio environment"}.get(self.condition,
+                                                                                              self.condition)
+        return f"{self.error:.1%} under {where}" + ("" if self.beyond_noise >= 0.995 * self.error else
+                                                    f" ({self.beyond_noise:.1%} beyond the noise)")
+
+
+class TexturedAbove(_Finding):
+    """The textured result, rendered over its maps, does not look like the textured source."""
+
+    kind: Literal["textured_above"] = "textured_above"
+    conditions: list[TexturedCondition]
+    threshold: float
+
+    def sentence(self) -> str:
+        return (f"the textured result is off the textured source: {', '.join(c.words() for c in self.conditions)}, "
+                f"over the {self.threshold:.0%} threshold")
+
+
+class TexturedNotes(_Note):
+    """What the texel-by-texel remap could not carry as it is."""
+
+    kind: Literal["textured_notes"] = "textured_notes"
+    held: list[str] = Field(default_factory=list, description="Parameters written as their mean, and why.")
+    outside: list[str] = Field(default_factory=list, description="Texel values clamped to the table's range.")
+
+    def sentence(self) -> str:
+        parts = self.held + ([f"texels outside the table, clamped: {'; '.join(self.outside)}"] if self.outside else [])
+        return "; ".join(parts)
+
+
 class StartKept(_Note):
     """Every fitted point was worse at the scene's resolution and samples than the informed start."""
 
@@ -301,7 +337,8 @@ class NoisePolished(_Note):
 Finding = Annotated[
     Union[ErrorAboveThreshold, ModelMismatch, HeldOutAbove, CannotResolve, ImagePrecision, NoEffect, IllConditioned,
           NotAtMinimum,
-          PinnedOnBound, RendererAlters, ValidationSkipped, NothingFitted, TableLookup, StartKept, ChoiceTried, SchemeChosen, DeadParameters,
+          PinnedOnBound, RendererAlters, ValidationSkipped, NothingFitted, TableLookup, TexturedAbove, TexturedNotes,
+          StartKept, ChoiceTried, SchemeChosen, DeadParameters,
           JointRefined, PredictionNotRealised, NoisePolished],
     Field(discriminator="kind"),
 ]

@@ -74,7 +74,8 @@ class Job(Strict):
             "tuning": self.tuning.model_dump(mode="json"),
             "versions": self.versions,
         }
-        # Absent from the key when unused: fits stored before tables and textures keep their keys.
+        # Absent from the key when unused: fits stored before tables and textures keep their keys
+        # (and their reports are read as they are: report.READS_FROM).
         if self.lookup is not None:
             doc["lookup"] = self.lookup.model_dump(mode="json", exclude={"file"})
         if self.source.textures:  # an image by its content, not its path

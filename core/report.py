@@ -29,6 +29,9 @@ from .texturing import Textured
 SCHEMA_VERSION = 4
 """Bump whenever the fields change (an older reader refuses a field it does not know). 4: a job's
 table lookup, a textured source's record."""
+READS_FROM = 3
+"""The oldest format read: 4 only added fields that are absent (None, empty) in every result 3 could
+hold, and the digest leaves them out while they are, so a stored result of 3 is read as it is."""
 
 
 class NewerReportError(ConfigError):
@@ -148,8 +151,11 @@ class Report(WithDerived):
     @property
     def digest(self) -> str:
         """SHA-256 of the rest of the document: a report edited after it was written is not
-        taken for the job's result."""
+        taken for the job's result. Fields of format 4 are left out while absent (see `READS_FROM`)."""
         doc = self.model_dump(mode="json", exclude={"digest"})
+        for container, key in ((doc, "textures"), (doc["job"], "lookup"), (doc["job"]["source"], "textures")):
+            if not container.get(key):
+                container.pop(key, None)
         return hashlib.sha256(json.dumps(doc, sort_keys=True, ensure_ascii=False).encode()).hexdigest()
 
     def as_verdict(self) -> Verdict:
@@ -213,7 +219,7 @@ def parse_report(doc: Any, file: str) -> Report:
     if version > SCHEMA_VERSION:
         raise NewerReportError(f"written by a newer brdf-remap (report schema {version}; this one reads "
                           f"{SCHEMA_VERSION}): upgrade brdf-remap to read it", file=file)
-    if version < SCHEMA_VERSION:
+    if version < READS_FROM:
         raise ConfigError(f"written by an older brdf-remap (report schema {version}; this one reads "
                           f"{SCHEMA_VERSION}): run the job again to replace it", file=file)
     try:

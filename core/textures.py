@@ -3,9 +3,10 @@
 A `Texture` names an image file, how its pixel values become parameter values (an sRGB-encoded
 colour map is decoded through OpenColorIO; a data map is read as it is), and its filtering. Read,
 a texture is an array of linear values: H x W for a scalar parameter (an RGB image gives its
-luminance, as Mitsuba and Blender do), H x W x 3 for an RGB one. Written, a colour map (an RGB
-parameter within [0, 1]) is a 16-bit sRGB PNG, a data map within [0, 1] a 16-bit linear PNG, and
-anything beyond (an IOR) a float EXR.
+luminance, as renderers turn a colour into a number, or the one channel its `channel` names),
+H x W x 3 for an RGB one; a colour with an alpha channel is read as stored (straight), not
+multiplied by it. Written, a colour map (an RGB parameter within [0, 1]) is a 16-bit sRGB PNG, a
+data map within [0, 1] a 16-bit linear PNG, and anything beyond (an IOR) a float EXR.
 
 The probe sphere's texture coordinates, which every adapter that renders textures realises:
 u = φ / 2π and v = θ / π of the sphere's own frame (its pole along the image's up, +y; θ = 0 at
@@ -40,6 +41,8 @@ class Texture(Strict):
                                                               "read as a renderer decodes it); linear: read as "
                                                               "they are (a data map, an EXR).")
     filter: Literal["linear", "nearest"] = Field("linear", description="How a renderer interpolates it.")
+    channel: int | None = Field(None, ge=0, le=3, description="A scalar parameter read from this one channel of "
+                                                            "the image (a packed map); None: its luminance.")
     sha256: str = Field("", description="The file's content (a changed image is another job).")
 
 
@@ -52,16 +55,28 @@ class TextureMap:
     filter: str = "linear"
 
 
-def texture(path: str | Path, colorspace: str, filter: str = "linear", *, where: str = "") -> Texture:
-    """A texture of this file, hashed; a file that is not there or cannot be read is a ConfigError
-    naming it (and ``where`` the material and input that use it)."""
+MAX_FILE_BYTES = 2 << 30
+
+
+def texture(path: str | Path, colorspace: str, filter: str = "linear", *, channel: int | None = None,
+            where: str = "") -> Texture:
+    """A texture of this file, hashed; a file that is not there, not a regular file, too large or
+    unreadable is a ConfigError naming it (and ``where`` the material and input that use it)."""
     p = Path(path)
+    at = f" ({where})" if where else ""
     try:
-        digest = hashlib.sha256(p.read_bytes()).hexdigest()
+        if not p.is_file():
+            raise ConfigError(f"is not an image file{at}: check the path", file=str(p))
+        if p.stat().st_size > MAX_FILE_BYTES:
+            raise ConfigError(f"is over {MAX_FILE_BYTES >> 30} GiB{at}: not read as a texture", file=str(p))
+        digest = hashlib.sha256()
+        with open(p, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                digest.update(block)
     except OSError as exc:
-        raise ConfigError(f"cannot read the texture {p}: {exc.strerror or exc}" + (f" ({where})" if where else ""),
-                          file=str(p)) from None
-    return Texture(file=str(p.resolve()), colorspace=colorspace, filter=filter, sha256=digest)  # type: ignore[arg-type]
+        raise ConfigError(f"cannot read the texture: {exc.strerror or exc}{at}", file=str(p)) from None
+    return Texture(file=str(p.resolve()), colorspace=colorspace, filter=filter, channel=channel,  # type: ignore
+                   sha256=digest.hexdigest())
 
 
 def read_values(tex: Texture, kind: str, where: str = "") -> np.ndarray:
@@ -69,17 +84,34 @@ def read_values(tex: Texture, kind: str, where: str = "") -> np.ndarray:
     image repeated), float32, row 0 the image's top."""
     import OpenImageIO as oiio
 
-    buf = oiio.ImageBuf(tex.file)
-    spec = buf.spec()
-    if buf.has_error or spec.nchannels < 1:
-        raise ConfigError(f"cannot read the texture: {buf.geterror() or 'no channels'}" + (f" ({where})" if where else ""),
-                          file=tex.file)
-    if spec.width * spec.height > MAX_TEXELS:
-        raise ConfigError(f"{spec.width} x {spec.height} texels: at most {MAX_TEXELS} in one texture", file=tex.file)
-    px = np.asarray(buf.get_pixels(oiio.FLOAT), np.float32)
-    px = px[..., :3] if px.shape[-1] >= 3 else np.repeat(px[..., :1], 3, axis=-1)
+    from .imageio import captured_stderr
+
+    at = f" ({where})" if where else ""
+    config = oiio.ImageSpec()
+    config.attribute("oiio:UnassociatedAlpha", 1)  # colour as stored, not multiplied by the alpha
+    with captured_stderr() as said:
+        buf = oiio.ImageBuf(tex.file, 0, 0, config)
+        spec = buf.spec()
+        if not buf.has_error and spec.width * spec.height > MAX_TEXELS:
+            raise ConfigError(f"{spec.width} x {spec.height} texels: at most {MAX_TEXELS} in one texture{at}",
+                              file=tex.file)
+        ok = not buf.has_error and buf.read(force=True)
+        px = np.asarray(buf.get_pixels(oiio.FLOAT), np.float32) if ok else None
+    if px is None or buf.has_error or spec.nchannels < 1 or px.ndim != 3:
+        why = (buf.geterror() or said["text"] or "no pixels").strip().splitlines()[0]
+        raise ConfigError(f"cannot read the texture: {why}{at}", file=tex.file)
+    if tex.channel is not None:
+        if tex.channel >= px.shape[-1]:
+            raise ConfigError(f"has {px.shape[-1]} channels, and channel {tex.channel} is read{at}", file=tex.file)
+        px = np.repeat(px[..., tex.channel:tex.channel + 1], 3, axis=-1)
+    else:
+        px = px[..., :3] if px.shape[-1] >= 3 else np.repeat(px[..., :1], 3, axis=-1)
     if tex.colorspace == "srgb":
         px = _convert(px, SRGB, LINEAR)
+    if not np.isfinite(px).all():
+        bad = int((~np.isfinite(px)).any(axis=-1).sum())
+        raise ConfigError(f"has {bad} texels that are not finite numbers (NaN or infinity){at}: fix the image",
+                          file=tex.file)
     return np.ascontiguousarray(px @ LUMA.astype(np.float32) if kind == "scalar" else px)
 
 

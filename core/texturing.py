@@ -3,7 +3,7 @@ target's maps as files beside its native material, and the textured source and r
 on the probe sphere by their own renderers and compared.
 
 A target parameter that varies over the texture but that the target renderer takes only as a
-number (Mitsuba's roughplastic alpha) is written as its mean, and the record says so."""
+number (its model does not list it as `texturable`) is written as its mean, and the record says so."""
 
 from __future__ import annotations
 
@@ -99,7 +99,8 @@ def texture_result(resolved, source: Adapter | None, target: Adapter, params: di
     spec = resolved.target_spec
     held = {n: f"{spec.name} takes {n} only as a number: its mean over the texture is written"
             for n in out.maps if n not in spec.texturable or not target.textures}
-    native_params = {**params, **out.constants, **{n: _mean(out.maps[n]) for n in held}}
+    numbers = {**out.constants, **{n: _mean(out.maps[n]) for n in held}}
+    native_params = {**params, **{n: spec.param(n).clip(v) for n, v in numbers.items()}}
     maps = {n: m for n, m in out.maps.items() if n not in held}
     filt = next(iter(job.source.textures.values())).filter
     files, native, records = {}, {}, []
@@ -121,12 +122,27 @@ def texture_result(resolved, source: Adapter | None, target: Adapter, params: di
     return Texturing(record, files, native, native_params, images)
 
 
+def textured_findings(record: Textured, threshold: float, resolve_limit: float) -> list:
+    """What the textured check and the remap say for the verdict: the conditions (resolved by their
+    noise) where the textured result is over the threshold beyond the noise; the means written and
+    the texels clamped, as a note."""
+    from .findings import TexturedAbove, TexturedCondition, TexturedNotes
+
+    above = [TexturedCondition(condition=c.condition, error=c.error, beyond_noise=c.beyond_noise)
+             for c in record.checks if c.noise_floor <= resolve_limit and c.beyond_noise > threshold]
+    out: list = [TexturedAbove(conditions=above, threshold=threshold)] if above else []
+    if record.held or record.outside:
+        out.append(TexturedNotes(held=list(record.held.values()), outside=list(record.outside)))
+    return out
+
+
 def _plain(params: dict[str, Any]) -> dict[str, Any]:
     return {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()}
 
 
 def _mean(values: np.ndarray) -> Any:
-    m = values.reshape(-1, values.shape[-1]).mean(axis=0) if values.ndim == 3 else values.mean()
+    m = values.reshape(-1, values.shape[-1]).mean(axis=0, dtype=np.float64) if values.ndim == 3 else \
+        values.mean(dtype=np.float64)
     return tuple(float(x) for x in m) if np.ndim(m) else float(m)
 
 

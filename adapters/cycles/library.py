@@ -64,10 +64,10 @@ def _entry(m: dict, file: str) -> Entry:
         return Entry(name=m["name"], file=file, problem=str(exc), notes=m["notes"])
     textures = {}
     for pname, t in m.get("textures", {}).items():
-        if Path(t["file"]).is_file():
+        try:
             textures[pname] = texture(t["file"], t["colorspace"], t["filter"], where=f"{m['name']}: {pname}")
-        else:
-            notes.append(f"{pname}: its image {t['file']} is not found: read as its constant")
+        except ConfigError as exc:
+            notes.append(f"{pname}: {exc}: read as its constant")
     return Entry(name=m["name"], file=file, notes=notes, textured=m["textured"],
                  material=Material(adapter="cycles", model=m["model"], params=params, name=m["name"],
                                    textures=textures))

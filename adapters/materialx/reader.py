@@ -130,6 +130,7 @@ def _textures(shader, category: str, name: str, notes: list[str]) -> dict:
         filt = node.getInput("filtertype")
         out[pname] = texture(path, "srgb" if space in SRGB_SPACES else "linear",
                              "nearest" if filt is not None and filt.getValueString() == "closest" else "linear",
+                             channel=0 if node.getType() == "float" else None,  # MaterialX reads a float's first
                              where=f"{name}: {pname}")
     return out
 

@@ -54,7 +54,10 @@ class MaterialXWriter:
             for pname, tex in sorted(item.textures.items()):
                 _image(m, doc, shader, name, pname, tex)
             material = doc.addMaterialNode(name, shader)
-            material.setDocString(f"source material: {item.name}")
+            loose = sorted(set(item.textures) - set(DIRECT))
+            material.setDocString(f"source material: {item.name}" + (
+                f"; maps not read here (no open_pbr_surface input takes them as they are, see library.blend): "
+                f"{', '.join(loose)}, written as their value at the textures' mean" if loose else ""))
         check = m.createDocument()
         check.copyContentFrom(doc)
         check.importLibrary(standard_libraries())

@@ -272,6 +272,11 @@ def _bitmap(doc: _Document, prop: ET.Element, name: str, notes: list[str]) -> Te
         notes.append(f"{name}: a {tex.get('type', 'texture')} texture is read as its constant (only a bitmap's "
                      "image is remapped texel by texel)")
         return None
+    if any(t.get("name") == "to_uv" for t in tex if t.tag == "transform") or \
+            strings.get("wrap_mode", "repeat") != "repeat":
+        notes.append(f"{name}: its bitmap is laid with a to_uv transform or a wrap mode: read as its constant "
+                     "(only an image laid as it is over the UV map is remapped texel by texel)")
+        return None
     path = (doc.path.parent / strings["filename"]).resolve()
     if not path.is_file():
         notes.append(f"{name}: its image {strings['filename']!r} is not found beside the scene: read as its constant")

@@ -59,14 +59,12 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _table(text: str):
-    from pathlib import Path
-
     from ..library.convert import TableUse
     from ..tables import TableMap, read_table
+    from ..tables.table import table_file
 
     table = read_table(text)
-    path = Path(text)
-    return TableUse(str((path if path.suffix == ".json" else path / "table.json").resolve()), table, TableMap(table))
+    return TableUse(str(table_file(text).resolve()), table, TableMap(table))
 
 
 def _print(result, out) -> None:

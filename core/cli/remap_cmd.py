@@ -129,6 +129,15 @@ def _held_out(r: Report) -> str:
     return ", ".join(parts) + f"   ({where}; seeds the fit never saw{skipped})"
 
 
+def _textures(t) -> str:
+    """A textured source's maps and its textured check, each condition's error beside its noise."""
+    maps = ", ".join(m.param for m in t.maps) or "none"
+    checks = ", ".join(f"{c.condition} {c.error:.1%} (noise {c.noise_floor:.1%})" for c in t.checks) or \
+        f"not rendered: {t.check_skipped}"
+    return (f"{t.width} x {t.height} texels remapped texel by texel in {t.seconds:.2f} s; maps {maps}; textured "
+            f"check at {t.checks[0].resolution if t.checks else '-'} px: {checks}")
+
+
 def _verdict(r: Report) -> str:
     """The status and why; an ok that only some conditions could judge names them."""
     word = {"ok": "ok", "mismatch": "MISMATCH", "unreliable": "UNRELIABLE"}[r.verdict]
@@ -163,6 +172,7 @@ def print_report(r: Report, folder, resumed: bool) -> None:
         ("perceptual", f"{m.perceptual:.2f} mean ΔE_ITP"),
         *([("fit scene", r.fit_scene.why)] if r.fit_scene else []),
         ("held-out", _held_out(r)),
+        *([("textures", _textures(r.textures))] if r.textures else []),
         _start(r),
         ("renders", f"{r.renders} target ({', '.join(f'{v} at {k}' for k, v in r.renders_by_resolution.items())})"
                     f" + {r.source_renders} source"),

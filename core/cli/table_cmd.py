@@ -72,12 +72,17 @@ def _summary(t) -> None:
           "(their fit itself in question)")
     print(f"cost           {b.renders} target renders, {b.seconds:.0f} s of fits; this build {b.wall_seconds:.1f} s "
           f"in {b.ran_in}")
+    print("maps           held-out lookup error / direct fit error; cross-validated error on the grid (a fraction "
+          "of each parameter's range)")
     for m, c in t.candidates.items():
-        cv = max((v for k, v in c.cv_rms.items() if k != "error"), default=float("nan"))
-        held = (f"held-out lookup/fit error: median {c.median_ratio:.3f}, 95th percentile {c.p95_ratio:.3f}"
-                if c.median_ratio is not None else "no held-out lookups")
+        if c.problem:
+            print(f"    {m:<12} cannot be fitted here: {c.problem}")
+            continue
+        held = (f"median {c.median_ratio:.3f}, 95th percentile {c.p95_ratio:.3f}" if c.median_ratio is not None
+                else "no held-out lookups")
+        cv = ", ".join(f"{k} " + ("–" if v is None else f"{v:.3f}") for k, v in c.cv_rms.items() if k != "error")
         mark = "*" if m == t.chosen else " "
-        print(f"  {mark} {m:<12} worst cross-validated error {cv:.3f} of a range; {held}")
+        print(f"  {mark} {m:<12} {held}; {cv}")
     print(f"chosen         {t.chosen}: {t.chosen_why}")
 
 
@@ -97,6 +102,9 @@ def lookup(args: argparse.Namespace) -> int:
     from .remap_cmd import print_report
 
     t0 = time.perf_counter()
+    if args.fix:
+        raise ConfigError("goes with a fit; a table's lookup holds what its spec's target.fix held (build another "
+                          "table to hold more)", field="--fix")
     table = read_table(args.table)
     source = load_material(args.source)
     registry = collect_adapters()
@@ -144,10 +152,9 @@ def _here(table_arg: str):
 
 
 def _table_file(table_arg: str):
-    from pathlib import Path
+    from ..tables.table import table_file
 
-    p = Path(table_arg)
-    return (p / "table.json" if p.is_dir() else p).resolve()
+    return table_file(table_arg).resolve()
 
 
 def _print_answer(resolved, answer, folder, files) -> None:

@@ -142,10 +142,13 @@ def _through_table(item: Item, dest: Destination, registry: AdapterRegistry, sce
             continue
         try:
             axis_values(t, src, spec, e.file, prefix=f"{e.name}: params")
-            values = mean_values(read_inputs(t, src, spec, e.file))
+            loose = sorted(set(src.textures) - set(t.spec.axes))
+            if loose:
+                raise ConfigError(f"its axes are {', '.join(t.spec.axes)}, and {', '.join(loose)} is an image")
         except ConfigError as exc:
             why = [f"the table {t.name!r} does not map it: {exc}"]
             continue
+        values = mean_values(read_inputs(t, src, spec, e.file))  # a broken image fails the material, said
         answer = look_up(t, use.tmap, values)
         mean = src.model_copy(update={"params": {**src.params, **values}})
         job = Job(source=mean, target=t.spec.target, scene=scene, settings=settings, label=f"{e.file}: {e.name}",
@@ -229,9 +232,14 @@ def _write_libraries(result: Conversion, folder: Path, formats: Formats) -> None
     ok = [i for i in result.items if i.done is not None and i.done.report is not None]
     models = {i.model for i in ok}
     writers = formats.writers_for(result.destination.adapter, models) or [NativeFiles(result.destination.adapter)]
-    converted = {i.slot: _converted(i, folder) for i in ok}
+    converted = {}
+    for i in ok:
+        try:
+            converted[i.slot] = _converted(i, folder)
+        except RemapError as exc:  # its maps could not be gathered: the others are written all the same
+            result.library_notes.append(f"{i.entry.name}: left out of the libraries: {exc}")
     for writer in writers:
-        mine = [converted[i.slot] for i in ok if not writer.models or i.model in writer.models]
+        mine = [converted[i.slot] for i in ok if i.slot in converted and (not writer.models or i.model in writer.models)]
         if not mine:
             continue
         try:

@@ -54,6 +54,7 @@ def _textures(rep, folder: str) -> dict | None:
             "maps": [{"param": m.param, "href": f"{folder}/{m.file}", "space": m.colorspace,
                       "range": f"{m.low:.3g} to {m.high:.3g}"} for m in t.maps],
             "images": [f"{folder}/textured-{n}.png" for n in ("source", "target", "error")] if t.checks else [],
+            "lit": "studio" if t.checks[-1:] and t.checks[-1].condition == "environment" else "scene lights",
             "checks": [{"condition": c.condition, "error": c.error, "noise": c.noise_floor, "de": c.perceptual,
                         "resolution": c.resolution, "spp": c.spp} for c in t.checks],
             "skipped": t.check_skipped, "held": list(t.held.values()), "outside": t.outside, "notes": t.notes}

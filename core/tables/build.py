@@ -27,7 +27,7 @@ from ..plugins import AdapterRegistry
 from ..runner import Done, Runner, Task
 from ..schemas import Material, ModelSpec
 from ..store import Store, owned
-from .maps import METHODS, choose_hyperparameter
+from .maps import METHODS, build, choose_hyperparameter
 from .spec import Layout, TableSpec
 from .table import (TABLE_SCHEMA_VERSION, BuildRecord, Candidate, PointRecord, Table, TableMap, grid_of,
                     outputs_for, write_table)
@@ -138,20 +138,26 @@ def _mapped(p: Plan, points: list[PointRecord], done: list[Done]) -> list[str]:
 
 
 def fit_candidates(draft: Table) -> dict[str, Candidate]:
+    """Each kind of map's hyperparameters and cross-validated errors; a kind that cannot be fitted to
+    these points says why (and is not chosen)."""
     out = {}
     for method in METHODS:
         hyper, cv = {}, {}
-        for o in draft.outputs:
-            h, err = choose_hyperparameter(method, grid_of(draft, o))
-            hyper[o.label], cv[o.label] = h, err
+        try:
+            for o in draft.outputs:
+                grid = grid_of(draft, o)
+                h, err = choose_hyperparameter(method, grid)
+                build(method, grid, h)  # it must fit all the used points, whatever the folds did
+                hyper[o.label], cv[o.label] = h, (err if math.isfinite(err) else None)
+        except (ValueError, np.linalg.LinAlgError) as exc:
+            out[method] = Candidate(method=method, problem=str(exc).splitlines()[0], hyper={}, cv_rms={})
+            continue
         out[method] = Candidate(method=method, hyper=hyper, cv_rms=cv)
     return out
 
 
 def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRegistry, workers: Workers, *,
                 quiet: bool = False) -> Table:
-    from .. import __version__
-
     t0 = time.perf_counter()
     p = plan(spec, file, registry)
     scene = spec.scene.scene(Path(file).resolve().parent)
@@ -165,46 +171,65 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
         done = runner.run(grid_tasks + held_tasks)
         grid_done, held_done = done[:len(grid_tasks)], done[len(grid_tasks):]
         points = [record(t.slot.split("/")[1], v, d, idx) for t, (idx, v), d in zip(grid_tasks, p.grid, grid_done)]
-        if not any(pt.used for pt in points):
-            raise ConfigError("no grid point gave a fit the map can use (see points.csv): nothing to build a map "
-                              "from", file=file)
+        need = len(p.layout.dims) + 2
+        if sum(pt.used for pt in points) < need:
+            write_points_csv(folder / "points.csv", _draft(p, file, spec, points, [], [], None))
+            raise ConfigError(f"{sum(pt.used for pt in points)} of {len(points)} grid points gave a fit the map can "
+                              f"use, and a map over {need - 2} dimensions needs {need}: see points.csv for why",
+                              file=file)
         held = [record(t.slot.split("/")[1], v, d) for t, v, d in zip(held_tasks, p.held, held_done)]
-        names = _mapped(p, points, grid_done)
         first = next(d.report for d, pt in zip(grid_done, points) if pt.used)
-        draft = Table(schema_version=TABLE_SCHEMA_VERSION, tool=f"brdf-remap {__version__}",
-                      name=spec.name or Path(file).stem, spec=spec, source_kinds=p.layout.kinds,
-                      source_params=p.source_params, target_params=p.target_spec.complete(first.params),
-                      versions=first.job.versions, outputs=outputs_for(p.target_spec, names, p.layout.separable),
-                      points=points, holdout=held, candidates={}, chosen="", chosen_why="",
-                      build=BuildRecord(points=0, used=0, flagged=0, left_out=0, holdout=0, renders=0, seconds=0,
-                                        wall_seconds=0, ran_in=""))
+        draft = _draft(p, file, spec, points, held, _mapped(p, points, grid_done), first)
         draft = draft.model_copy(update={"candidates": fit_candidates(draft)})
+        if all(c.problem for c in draft.candidates.values()):
+            raise ConfigError("no map could be fitted to the grid: " + "; ".join(
+                f"{m}: {c.problem}" for m, c in draft.candidates.items()), file=file)
         candidates = _check_holdout(p, registry, runner, draft, scene)
         chosen, why = choose(candidates)
-        table = draft.model_copy(update={
-            "candidates": candidates, "chosen": chosen, "chosen_why": why,
-            "build": BuildRecord(points=len(points), used=sum(pt.used for pt in points),
-                                 flagged=sum(pt.verdict in ("unreliable", "failed") for pt in points),
-                                 left_out=sum(not pt.used for pt in points), holdout=len(held),
-                                 renders=sum(pt.renders for pt in points + held) + runner_renders(folder),
-                                 seconds=sum(pt.seconds for pt in points + held),
-                                 wall_seconds=time.perf_counter() - t0, ran_in=workers.where)})
+        table = draft.model_copy(update={"candidates": candidates, "chosen": chosen, "chosen_why": why})
+        renders, seconds = checks_account(folder, table)
+        table = table.model_copy(update={"build": BuildRecord(
+            points=len(points), used=sum(pt.used for pt in points),
+            flagged=sum(pt.verdict in ("unreliable", "failed") for pt in points),
+            left_out=sum(not pt.used for pt in points), holdout=len(held),
+            renders=sum(pt.renders for pt in points + held) + renders,
+            seconds=sum(pt.seconds for pt in points + held) + seconds,
+            wall_seconds=time.perf_counter() - t0, ran_in=workers.where)})
         write_table(folder / "table.json", table)
         write_points_csv(folder / "points.csv", table)
     return table
 
 
-def runner_renders(folder: Path) -> int:
-    """Target renders of the stored lookups (checks/)."""
+def _draft(p: Plan, file: str, spec: TableSpec, points, held, names, first) -> Table:
+    """The table without its maps' account yet."""
+    from .. import __version__
+
+    return Table(schema_version=TABLE_SCHEMA_VERSION, tool=f"brdf-remap {__version__}",
+                 name=spec.name or Path(file).stem, spec=spec, source_kinds=p.layout.kinds,
+                 source_params=p.source_params,
+                 target_params=p.target_spec.complete(first.params if first else {}),
+                 versions=first.job.versions if first else {}, outputs=outputs_for(p.target_spec, names,
+                                                                                   p.layout.separable),
+                 points=points, holdout=held, candidates={}, chosen="", chosen_why="",
+                 build=BuildRecord(points=0, used=0, flagged=0, left_out=0, holdout=0, renders=0, seconds=0,
+                                   wall_seconds=0, ran_in=""))
+
+
+def checks_account(folder: Path, table: Table) -> tuple[int, float]:
+    """Target renders and seconds of this table's stored lookups (checks/<map>/<held-out id>)."""
     from ..report import read_report
 
-    total = 0
-    for path in sorted((folder / "checks").glob("*/*/result.json")):
-        try:
-            total += read_report(path).renders
-        except ConfigError:
-            continue
-    return total
+    renders, seconds = 0, 0.0
+    for method, c in table.candidates.items():
+        for h, err in zip(table.holdout, c.holdout_errors):
+            if err is None:
+                continue
+            try:
+                r = read_report(folder / "checks" / method / h.id / "result.json")
+            except ConfigError:
+                continue
+            renders, seconds = renders + r.renders, seconds + r.seconds
+    return renders, seconds
 
 
 def _check_holdout(p: Plan, registry: AdapterRegistry, runner: Runner, draft: Table, scene) -> dict[str, Candidate]:
@@ -215,7 +240,9 @@ def _check_holdout(p: Plan, registry: AdapterRegistry, runner: Runner, draft: Ta
         return draft.candidates
     settings = draft.spec.options.model_copy(update={"validation": "none"})
     tasks, where = [], []
-    for method in draft.candidates:
+    for method, c in draft.candidates.items():
+        if c.problem:
+            continue
         tmap = TableMap(draft, method)
         for i, h in fitted:
             params, expected = tmap.params(h.values)
@@ -242,7 +269,7 @@ def _check_holdout(p: Plan, registry: AdapterRegistry, runner: Runner, draft: Ta
 def choose(candidates: dict[str, Candidate]) -> tuple[str, str]:
     """The map whose lookups of the held-out materials come closest to their direct fits (median
     ratio, then the 95th percentile); without held-out materials, the least cross-validated error."""
-    judged = {m: c for m, c in candidates.items() if c.median_ratio is not None}
+    judged = {m: c for m, c in candidates.items() if c.median_ratio is not None and not c.problem}
     if judged:
         best = min(judged, key=lambda m: (round(judged[m].median_ratio, 3), round(judged[m].p95_ratio, 3),
                                           PREFERENCE.index(m)))
@@ -251,8 +278,8 @@ def choose(candidates: dict[str, Candidate]) -> tuple[str, str]:
                       f"{c.median_ratio:.3f}, 95th percentile {c.p95_ratio:.3f} of the direct fit's error")
 
     def cv(m: str) -> float:
-        vals = [v for k, v in candidates[m].cv_rms.items() if k != "error" and math.isfinite(v)]
-        return float(np.mean(vals)) if vals else math.inf
+        vals = [v for k, v in candidates[m].cv_rms.items() if k != "error" and v is not None]
+        return float(np.mean(vals)) if vals and not candidates[m].problem else math.inf
 
     best = min(candidates, key=lambda m: (round(cv(m), 4), PREFERENCE.index(m)))
     return best, f"no held-out materials: least cross-validated error on the grid ({cv(best):.4f} of the range)"

@@ -43,15 +43,14 @@ class Grid:
 
 class Multilinear:
     """Interpolation of the grid, multilinear in each cell; a point left out is filled from its
-    used neighbours on the grid (inverse distance), so the grid stays whole."""
+    neighbours along the grid's lines (`fill`), so the grid stays whole."""
 
     name = "multilinear"
 
     def __init__(self, grid: Grid, _: float | int | None = None):
         values = np.full(grid.shape, np.nan)
         values[tuple(grid.idx[grid.used].T)] = grid.y[grid.used]
-        self.values = _fill(values)
-        self.axes = [np.linspace(0.0, 1.0, n) for n in grid.shape]
+        self.values = fill(values)
 
     def predict(self, x: np.ndarray) -> np.ndarray:
         x = np.clip(np.asarray(x, np.float64), 0.0, 1.0)
@@ -71,21 +70,45 @@ class Multilinear:
         return out
 
 
-def _fill(values: np.ndarray) -> np.ndarray:
-    """Grid nodes without a value (NaN) get the inverse-distance mean of the nodes that have one."""
-    holes = np.argwhere(np.isnan(values))
-    if len(holes) == 0:
-        return values
-    have = np.argwhere(~np.isnan(values))
-    if len(have) == 0:
-        raise ValueError("no point of the grid can be used")
-    scale = 1.0 / np.maximum(np.array(values.shape) - 1, 1)
+def fill(values: np.ndarray) -> np.ndarray:
+    """Grid nodes without a value (NaN) filled from the nodes along each grid line through them: the
+    mean of the linear interpolations between the nearest known nodes on either side, or where a line
+    has known nodes on one side only, the linear extrapolation of the two nearest (a linear function
+    is filled exactly). Repeated until every node is filled (a node no line reaches takes the mean of
+    the nodes that have a value)."""
     out = values.copy()
-    for h in holes:
-        d = np.linalg.norm((have - h) * scale, axis=1)
-        wgt = 1.0 / d ** 2
-        out[tuple(h)] = float(np.sum(wgt * values[tuple(have.T)]) / np.sum(wgt))
+    if not np.isnan(out).any():
+        return out
+    if np.isnan(out).all():
+        raise ValueError("no point of the grid can be used")
+    for _ in range(sum(values.shape)):
+        holes = np.argwhere(np.isnan(out))
+        if len(holes) == 0:
+            return out
+        found = {tuple(h): _along_lines(out, tuple(h)) for h in holes}
+        filled = {h: v for h, v in found.items() if v is not None}
+        if not filled:
+            break
+        for h, v in filled.items():
+            out[h] = v
+    out[np.isnan(out)] = float(np.nanmean(out))
     return out
+
+
+def _along_lines(values: np.ndarray, at: tuple[int, ...]) -> float | None:
+    estimates = []
+    for d, n in enumerate(values.shape):
+        line = [values[at[:d] + (i,) + at[d + 1:]] for i in range(n)]
+        known = [i for i, v in enumerate(line) if not np.isnan(v)]
+        below = [i for i in known if i < at[d]]
+        above = [i for i in known if i > at[d]]
+        if below and above:
+            a, b = below[-1], above[0]
+            estimates.append(line[a] + (line[b] - line[a]) * (at[d] - a) / (b - a))
+        elif len(below) >= 2 or len(above) >= 2:
+            a, b = (below[-1], below[-2]) if len(below) >= 2 else (above[0], above[1])
+            estimates.append(line[a] + (line[a] - line[b]) * (at[d] - a) / (a - b))
+    return float(np.mean(estimates)) if estimates else None
 
 
 def monomials(dims: int, degree: int) -> list[tuple[int, ...]]:

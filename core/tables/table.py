@@ -97,10 +97,12 @@ class Candidate(Strict):
     """One kind of map, fitted to the used grid points, and how it did."""
 
     method: str
+    problem: str = Field("", description="Why this map cannot be fitted to the grid's used points ('': it can).")
     hyper: dict[str, float | int | None] = Field(description="Per output: the hyperparameter cross-validation chose "
                                                              "(polynomial degree, RBF smoothing).")
-    cv_rms: dict[str, float] = Field(description="Per output: cross-validated RMS error on the grid, as a fraction "
-                                                 "of the parameter's range (its log range for a log parameter).")
+    cv_rms: dict[str, float | None] = Field(description="Per output: cross-validated RMS error on the grid, as a "
+                                                        "fraction of the parameter's range (its log range for a log "
+                                                        "parameter); None where it could not be measured.")
     holdout_errors: list[float | None] = Field(default_factory=list, description="Relative RMSE of its lookup of "
                                                                                  "each held-out material.")
     ratios: list[float | None] = Field(default_factory=list, description="Each held-out material's lookup error "
@@ -112,7 +114,7 @@ class Candidate(Strict):
 class BuildRecord(Strict):
     points: int
     used: int
-    flagged: int = Field(description="Grid points whose verdict is unreliable.")
+    flagged: int = Field(description="Grid points whose verdict is unreliable, or whose fit failed.")
     left_out: int = Field(description="Grid points left out of the regression (their fit itself is in question).")
     holdout: int
     renders: int = Field(description="Target renders of every fit and check, all runs.")
@@ -150,7 +152,9 @@ class Table(WithDerived):
     def digest(self) -> str:
         """SHA-256 of what determines the map (all but the build's account of time and place): the
         same table rebuilt gives the same digest, and lookups stored with it stay valid."""
-        doc = self.model_dump(mode="json", exclude={"digest", "build", "tool"})
+        timing = {"seconds", "renders"}
+        doc = self.model_dump(mode="json", exclude={"digest": True, "build": True, "tool": True,
+                                                    "points": {"__all__": timing}, "holdout": {"__all__": timing}})
         return hashlib.sha256(json.dumps(doc, sort_keys=True, ensure_ascii=False).encode()).hexdigest()
 
     @property
@@ -200,16 +204,24 @@ class TableMap:
         layout = self.table.layout
         arr = {k: np.asarray(values[k], np.float64) for k in self.table.spec.axes}
         arr = {k: (v.reshape(-1, 3) if layout.kinds[k] == "rgb" else v.reshape(-1)) for k, v in arr.items()}
+        features: dict[int | None, np.ndarray] = {}
+
+        def at(channel: int | None) -> np.ndarray:  # each channel's coordinates, computed once
+            if channel not in features:
+                features[channel] = layout.features(arr, channel)
+            return features[channel]
+
         out: dict[str, np.ndarray] = {}
         chans: dict[str, list] = {}
         for o in self.table.outputs:
             f = self.regressors[o.label].predict
-            if o.per_channel:
-                out[o.param] = np.stack([o.from_unit(f(layout.features(arr, c))) for c in range(3)], axis=-1)
+            if o.per_channel:  # the three channels' coordinates in one call
+                both = o.from_unit(f(np.concatenate([at(c) for c in range(3)])))
+                out[o.param] = both.reshape(3, -1).T
             elif o.channel is not None:
-                chans.setdefault(o.param, [None] * 3)[o.channel] = o.from_unit(f(layout.features(arr, None)))
+                chans.setdefault(o.param, [None] * 3)[o.channel] = o.from_unit(f(at(None)))
             else:
-                out[o.param] = o.from_unit(f(layout.features(arr, None)))
+                out[o.param] = o.from_unit(f(at(None)))
         out.update({k: np.stack(v, axis=-1) for k, v in chans.items()})
         return out
 
@@ -227,9 +239,12 @@ def outside(table: Table, values: dict[str, Any]) -> list[str]:
     """The axes whose values lie outside the grid's range, in words (clamped by the map)."""
     out = []
     for name, ax in table.spec.axes.items():
-        v = np.asarray(values[name], np.float64)
+        v = np.asarray(values[name])
+        v = v if v.dtype in (np.float32, np.float64) else v.astype(np.float64)
         lo, hi = ax.range
         tol = 1e-4 * (hi - lo)  # an image's quantisation (a 16-bit PNG's 1.0, 0.4) is not outside
+        if lo - tol <= float(v.min()) and float(v.max()) <= hi + tol:
+            continue
         below, above = v < lo - tol, v > hi + tol
         if below.any() or above.any():
             shown = (f"{float(v.min()):.4g}" if below.any() else f"{float(v.max()):.4g}")
@@ -245,11 +260,15 @@ def write_table(path: Path, table: Table) -> Path:
     return write_text_atomic(path, json.dumps(table.model_dump(mode="json"), indent=1, ensure_ascii=False) + "\n")
 
 
+def table_file(path: str | Path) -> Path:
+    """A table given as its folder or as its file: the file."""
+    p = Path(path)
+    return p / "table.json" if p.is_dir() else p
+
+
 def read_table(path: str | Path) -> Table:
     """A table file, checked: its format version and its digest (an edited table is refused)."""
-    p = Path(path)
-    if p.is_dir():
-        p = p / "table.json"
+    p = table_file(path)
     try:
         doc = json.loads(p.read_text(encoding="utf-8"))
     except FileNotFoundError:

@@ -89,10 +89,11 @@ def remap_texels(table: Table, tmap: TableMap, inputs: Inputs) -> Remapped:
     pred = DenseMap(tmap).predict(inputs.values)
     seconds = time.perf_counter() - t0
     maps, constants = {}, {}
-    spans = {o.param: (o.upper - o.lower) for o in table.outputs}
+    bounds = {o.param: (o.lower, o.upper) for o in table.outputs}
     for name, v in pred.items():
-        if float(np.ptp(v)) <= UNIFORM * spans[name]:
-            mean = v.mean(axis=0)
+        lo, hi = bounds[name]
+        if float(np.ptp(v)) <= UNIFORM * (hi - lo):
+            mean = np.clip(v.mean(axis=0, dtype=np.float64), lo, hi)  # float32's 1e-4 is below 1e-4
             constants[name] = [float(x) for x in mean] if mean.ndim else float(mean)
         else:
             shape = (inputs.height, inputs.width) + ((3,) if v.ndim == 2 else ())

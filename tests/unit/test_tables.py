@@ -14,7 +14,7 @@ from brdfremap.core.schemas import Material
 from brdfremap.core.tables import Layout, TableMap, load_table_spec, read_table
 from brdfremap.core.tables.build import choose, plan
 from brdfremap.core.tables.lookup import axis_values, look_up
-from brdfremap.core.tables.maps import Grid, Multilinear, choose_hyperparameter, build
+from brdfremap.core.tables.maps import Grid, Multilinear, build, choose_hyperparameter, fill
 from brdfremap.core.tables.spec import Axis, TableSpec
 from brdfremap.core.tables.table import TABLE_SCHEMA_VERSION, Candidate, Table, outside, write_table
 from tablekit import SPEC, synthetic_table
@@ -183,3 +183,37 @@ def test_schema_lists_the_table_formats():
 
     known = collect_schemas()
     assert known["table"] is Table and known["table-spec"] is TableSpec
+
+
+def test_holes_are_filled_along_the_grid_lines_exactly_for_a_linear_map():
+    values = np.add.outer(np.linspace(0, 1, 5), 0.5 * np.linspace(0, 1, 4))  # linear in both axes
+    holed = values.copy()
+    holed[2, 1] = holed[0, 0] = holed[4, 3] = np.nan  # inside, and two corners (extrapolated)
+    assert np.allclose(fill(holed), values)
+    lone = np.full((3, 3), np.nan)
+    lone[1, 1] = 0.7
+    assert np.allclose(fill(lone), 0.7)
+    grid = _quadratic_grid()
+    lin = Grid(grid.x, grid.idx, 0.2 + 0.3 * grid.x[:, 0] - 0.1 * grid.x[:, 1], grid.used, grid.shape)
+    assert choose_hyperparameter("multilinear", lin)[1] < 1e-9  # cross-validated as interpolation, not a blur
+
+
+def test_a_map_that_cannot_be_fitted_says_why_and_is_not_chosen(tmp_path):
+    table = synthetic_table(tmp_path)
+    few = [p.model_copy(update={"used": i in (0, 11)}) for i, p in enumerate(table.points)]
+    from brdfremap.core.tables.build import fit_candidates
+
+    cands = fit_candidates(table.model_copy(update={"points": few}))
+    assert cands["rbf"].problem and not cands["rbf"].hyper  # two points: no thin-plate spline in two dimensions
+    assert choose(cands)[0] != "rbf"
+    json.dumps([c.model_dump(mode="json") for c in cands.values()], allow_nan=False)  # no Infinity in the file
+
+
+def test_the_digest_covers_the_map_not_the_builds_timing(tmp_path):
+    table = synthetic_table(tmp_path)
+    slower = table.model_copy(update={"points": [p.model_copy(update={"seconds": 9.0, "renders": 99})
+                                                 for p in table.points]})
+    assert slower.digest == table.digest
+    moved = table.model_copy(update={"points": [table.points[0].model_copy(update={"params": {
+        **table.points[0].params, "alpha": 0.3}}), *table.points[1:]]})
+    assert moved.digest != table.digest
