@@ -147,6 +147,9 @@ class ModelSpec(_Strict):
     smooth: bool = Field(False, description="Its reflection is perfectly smooth (a mirror, a smooth glass): a point "
                                             "light shows in it as a point at most, so it is seen, and fitted, "
                                             "under an environment.")
+    complex_ior: tuple[str, str] | None = Field(None, description="A conductor's complex IOR: the names of its "
+                                                                  "real and imaginary parts (eta, k), which tables "
+                                                                  "map as reflectivity and edge tint.")
     texturable: tuple[str, ...] = Field((), description="Parameters the renderer takes as an image, texel by "
                                                         "texel (`Adapter.render_textured`, native files).")
     derived: tuple[str, ...] = Field((), description="Quantities the adapter derives from the parameters "
@@ -165,6 +168,9 @@ class ModelSpec(_Strict):
         for n in self.texturable:
             if n not in names or self.param(n).kind == "choice":
                 raise ValueError(f"model {self.name!r}: texturable {n!r} is not a numeric parameter")
+        for n in self.complex_ior or ():
+            if n not in names or self.param(n).kind != "rgb":
+                raise ValueError(f"model {self.name!r}: complex_ior {n!r} is not an RGB parameter")
         for p in self.parameters:
             for n in p.inert_when:
                 if n not in names or n == p.name:

@@ -5,7 +5,8 @@ import json
 import yaml
 
 from brdfremap.core.tables import Layout, load_table_spec
-from brdfremap.core.tables.table import TABLE_SCHEMA_VERSION, BuildRecord, PointRecord, Table, outputs_for
+from brdfremap.core.tables.outputs import outputs_for
+from brdfremap.core.tables.table import TABLE_SCHEMA_VERSION, BuildRecord, PointRecord, Table
 
 SPEC = {
     "kind": "table", "name": "t",

@@ -129,6 +129,7 @@ METALLIC = ModelSpec(
     ),
     lobes={"diffuse": LobeSpec(empty=True), "specular": LobeSpec(params=("ior", "extinction", "roughness"))},
     texturable=("ior", "extinction", "roughness"),
+    complex_ior=("ior", "extinction"),
 )
 
 MODELS = {m.name: m for m in (PRINCIPLED, GLOSSY, DIFFUSE, METALLIC)}

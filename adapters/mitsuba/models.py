@@ -71,6 +71,7 @@ ROUGHCONDUCTOR = ModelSpec(
         "specular": LobeSpec(params=("alpha", "alpha_u", "alpha_v", "eta", "k", "specular_reflectance")),
     },
     texturable=("eta", "k", "alpha", "alpha_u", "alpha_v", "specular_reflectance"),
+    complex_ior=("eta", "k"),
 )
 
 CONDUCTOR = ModelSpec(
@@ -82,6 +83,7 @@ CONDUCTOR = ModelSpec(
     parameters=(CONDUCTOR_PRESET, ETA, K, SPEC_REFL),
     lobes={"diffuse": LobeSpec(empty=True), "specular": LobeSpec(params=("eta", "k", "specular_reflectance"))},
     texturable=("eta", "k", "specular_reflectance"),
+    complex_ior=("eta", "k"),
 )
 
 ROUGHPLASTIC = ModelSpec(
@@ -260,6 +262,7 @@ AS_CONDUCTOR = ModelSpec(
         "diffuse": LobeSpec(empty=True),
         "specular": LobeSpec(params=("reflectivity", "edge_tint", "eta", "k", "alpha", "specular_reflectance")),
     },
+    complex_ior=("eta", "k"),
 )
 
 AS_PLASTIC = ModelSpec(

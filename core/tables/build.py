@@ -29,8 +29,8 @@ from ..schemas import Material, ModelSpec
 from ..store import Store, owned
 from .maps import METHODS, build, choose_hyperparameter
 from .spec import Layout, TableSpec
-from .table import (TABLE_SCHEMA_VERSION, BuildRecord, Candidate, PointRecord, Table, TableMap, grid_of,
-                    outputs_for, write_table)
+from .outputs import choose_scales, outputs_for
+from .table import TABLE_SCHEMA_VERSION, BuildRecord, Candidate, PointRecord, Table, TableMap, grid_of, write_table
 
 QUESTIONED = frozenset({"not_at_minimum", "cannot_resolve", "image_precision", "renderer_alters", "no_effect"})
 """Findings that put the fit itself in question (it may not be the best this target does): such a
@@ -137,6 +137,41 @@ def _mapped(p: Plan, points: list[PointRecord], done: list[Done]) -> list[str]:
     return [n for n in p.target_spec.names if n in fitted]
 
 
+CLIFF_SPAN, CLIFF_MAD, CLIFF_SHARE = 0.15, 6.0, 0.1
+"""A used point is a cliff when a smooth map of its neighbours misses one of its parameters by over
+CLIFF_SPAN of the parameter's range and CLIFF_MAD times the points' median miss; at most
+CLIFF_SHARE of the points, the worst."""
+
+
+def leave_out_cliffs(draft: Table) -> list[PointRecord]:
+    """The points with the fits that landed in another optimum than their neighbours' (the paper's
+    cliffs: a parameter that jumps where the source changes a little) left out of the regression, and
+    said: a smooth map cannot follow a jump, and would carry it to every lookup around it."""
+    from .maps import cv_predictions
+
+    worst: dict[int, tuple[float, str]] = {}
+    for o in draft.outputs:
+        if o.kind == "error":
+            continue
+        grid = grid_of(draft, o)
+        try:
+            miss = np.abs(cv_predictions("rbf", grid, 1e-3) - grid.y)
+        except (ValueError, np.linalg.LinAlgError):
+            continue
+        mad = float(np.nanmedian(miss[grid.used])) if grid.used.any() else 0.0
+        for i in np.flatnonzero(grid.used & (miss > max(CLIFF_SPAN, CLIFF_MAD * mad))):
+            if miss[i] > worst.get(int(i), (0.0, ""))[0]:
+                worst[int(i)] = (float(miss[i]), o.label)
+    cap = int(CLIFF_SHARE * len(draft.points))
+    chosen = sorted(worst.items(), key=lambda kv: -kv[1][0])[:cap]
+    points = list(draft.points)
+    for i, (miss, label) in chosen:
+        points[i] = points[i].model_copy(update={"used": False, "left_out": (
+            f"a cliff: its {label} is {miss:.0%} of the range off a smooth map of its neighbours' (its fit found "
+            "another optimum)")})
+    return points
+
+
 def fit_candidates(draft: Table) -> dict[str, Candidate]:
     """Each kind of map's hyperparameters and cross-validated errors; a kind that cannot be fitted to
     these points says why (and is not chosen)."""
@@ -180,6 +215,8 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
         held = [record(t.slot.split("/")[1], v, d) for t, v, d in zip(held_tasks, p.held, held_done)]
         first = next(d.report for d, pt in zip(grid_done, points) if pt.used)
         draft = _draft(p, file, spec, points, held, _mapped(p, points, grid_done), first)
+        draft = draft.model_copy(update={"outputs": choose_scales(draft.outputs, lambda o: grid_of(draft, o))})
+        draft = draft.model_copy(update={"points": leave_out_cliffs(draft)})
         draft = draft.model_copy(update={"candidates": fit_candidates(draft)})
         if all(c.problem for c in draft.candidates.values()):
             raise ConfigError("no map could be fitted to the grid: " + "; ".join(

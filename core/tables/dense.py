@@ -9,7 +9,8 @@ import itertools
 
 import numpy as np
 
-from .table import ERROR, TableMap
+from .outputs import ERROR, finish
+from .table import TableMap
 
 NODES = {1: 257, 2: 129, 3: 49, 4: 21}
 """Nodes per dimension of the baked grid, by the map's dimensions (about two million values at most)."""
@@ -81,7 +82,7 @@ class DenseMap:
             else:
                 out[o.param] = _decode(o, at(None).interpolate(lut))
         out.update({k: np.stack(v, axis=-1) for k, v in chans.items()})
-        return out
+        return finish(self.table.outputs, out)
 
 
 def _decode(output, t: np.ndarray) -> np.ndarray:

@@ -169,20 +169,26 @@ def folds(n: int, k: int = FOLDS, seed: int = 0) -> list[np.ndarray]:
     return [np.isin(np.arange(n), order[i::k]) for i in range(k)]
 
 
-def cv_rms(method: str, grid: Grid, h: float | int | None) -> float:
-    """Root-mean-square error on the used points of each fold, predicted by a map fitted without it."""
-    errs = []
+def cv_predictions(method: str, grid: Grid, h: float | int | None) -> np.ndarray:
+    """Each used point predicted by the map fitted without its fold (NaN: not predicted)."""
+    pred = np.full(len(grid.y), np.nan)
     for test in folds(len(grid.y)):
         train = grid.subset(~test)
         test = test & grid.used
         if not test.any() or int(train.used.sum()) < grid.x.shape[1] + 2:
             continue
-        try:
-            pred = METHODS[method](train, h).predict(grid.x[test])
-        except (ValueError, np.linalg.LinAlgError):
-            return math.inf
-        errs.append((pred - grid.y[test]) ** 2)
-    return float(np.sqrt(np.mean(np.concatenate(errs)))) if errs else math.inf
+        pred[test] = METHODS[method](train, h).predict(grid.x[test])
+    return pred
+
+
+def cv_rms(method: str, grid: Grid, h: float | int | None) -> float:
+    """Root-mean-square error on the used points of each fold, predicted by a map fitted without it."""
+    try:
+        pred = cv_predictions(method, grid, h)
+    except (ValueError, np.linalg.LinAlgError):
+        return math.inf
+    ok = np.isfinite(pred) & grid.used
+    return float(np.sqrt(np.mean((pred[ok] - grid.y[ok]) ** 2))) if ok.any() else math.inf
 
 
 def choose_hyperparameter(method: str, grid: Grid) -> tuple[float | int | None, float]:

@@ -17,61 +17,11 @@ from pydantic import Field, ValidationError, computed_field
 from ..configio import validation_message
 from ..errors import ConfigError
 from ..model import Strict, WithDerived
-from ..schemas import ModelSpec, ParamSpec
 from .maps import Grid, Regressor, build
-from .spec import CHANNELS, Layout, TableSpec
+from .outputs import ERROR, Output, finish, target_value
+from .spec import Layout, TableSpec
 
 TABLE_SCHEMA_VERSION = 1
-ERROR = "error"
-"""The output that maps a direct fit's relative RMSE (its logarithm): what a fit reaches there."""
-
-
-class Output(Strict):
-    """One regressed quantity: a target parameter (or one channel of it), on its unit scale."""
-
-    param: str
-    kind: Literal["scalar", "rgb", "error"]
-    channel: int | None = Field(None, description="The channel of an RGB parameter mapped by a regression of its "
-                                                  "own (a full regression); None otherwise.")
-    per_channel: bool = Field(False, description="An RGB parameter whose one regression is applied to each channel "
-                                                 "with that channel of the source's colours (the separable form).")
-    lower: float
-    upper: float
-    scale: Literal["linear", "log"]
-
-    @property
-    def label(self) -> str:
-        return self.param if self.channel is None else f"{self.param}.{CHANNELS[self.channel]}"
-
-    def to_unit(self, v) -> np.ndarray:
-        v = np.asarray(v, np.float64)
-        if self.scale == "log":
-            return (np.log(np.maximum(v, self.lower)) - math.log(self.lower)) / (math.log(self.upper) -
-                                                                                  math.log(self.lower))
-        return (v - self.lower) / (self.upper - self.lower)
-
-    def from_unit(self, t, dtype=np.float64) -> np.ndarray:
-        t = np.clip(np.asarray(t, dtype), dtype(0.0), dtype(1.0))
-        if self.scale == "log":
-            lo, hi = math.log(self.lower), math.log(self.upper)
-            return np.exp(dtype(lo) + t * dtype(hi - lo))
-        return dtype(self.lower) + t * dtype(self.upper - self.lower)
-
-
-def outputs_for(spec: ModelSpec, names: list[str], separable: bool) -> list[Output]:
-    """The regressions that map these target parameters; then the direct fit's error."""
-    out = []
-    for name in names:
-        p: ParamSpec = spec.param(name)
-        common = dict(param=name, lower=p.lower, upper=p.upper, scale=p.scale)
-        if p.kind == "rgb" and separable and p.separable:
-            out.append(Output(kind="rgb", per_channel=True, **common))
-        elif p.kind == "rgb":
-            out += [Output(kind="rgb", channel=c, **common) for c in range(3)]
-        else:
-            out.append(Output(kind="scalar", **common))
-    out.append(Output(param=ERROR, kind="error", lower=1e-4, upper=10.0, scale="log"))
-    return out
 
 
 class PointRecord(Strict):
@@ -171,22 +121,9 @@ def grid_of(table: Table, output: Output) -> Grid:
     layout, pts = table.layout, table.points
     vals = {name: np.array([p.values[name] for p in pts], np.float64) for name in table.spec.axes}
     x = layout.features(vals, None)
-    y = np.array([_target_value(p, output) for p in pts])
+    y = np.array([target_value(p.params, p.error, output) for p in pts])
     used = np.array([p.used for p in pts]) & np.isfinite(y)
     return Grid(x, np.array([p.index for p in pts], int), np.nan_to_num(y), used, table.shape)
-
-
-def _target_value(p: PointRecord, output: Output) -> float:
-    if p.params is None:
-        return math.nan
-    if output.kind == "error":
-        return float(output.to_unit(p.error)) if p.error else math.nan
-    v = p.params.get(output.param)
-    if v is None:
-        return math.nan
-    if output.kind == "rgb":
-        v = float(np.mean(v)) if output.channel is None else float(v[output.channel])
-    return float(output.to_unit(v))
 
 
 class TableMap:
@@ -223,7 +160,7 @@ class TableMap:
             else:
                 out[o.param] = o.from_unit(f(at(None)))
         out.update({k: np.stack(v, axis=-1) for k, v in chans.items()})
-        return out
+        return finish(self.table.outputs, out)
 
     def params(self, values: dict[str, Any]) -> tuple[dict[str, Any], float]:
         """One material's complete target parameters and the error a direct fit reaches there."""

@@ -13,6 +13,7 @@ from ..errors import ConfigError
 from ..schemas import Material, ModelSpec
 from ..textures import read_values, resized
 from .dense import DenseMap
+from .outputs import param_bounds
 from .table import Table, TableMap, outside
 
 UNIFORM = 1e-4
@@ -89,7 +90,7 @@ def remap_texels(table: Table, tmap: TableMap, inputs: Inputs) -> Remapped:
     pred = DenseMap(tmap).predict(inputs.values)
     seconds = time.perf_counter() - t0
     maps, constants = {}, {}
-    bounds = {o.param: (o.lower, o.upper) for o in table.outputs}
+    bounds = param_bounds(table.outputs)
     for name, v in pred.items():
         lo, hi = bounds[name]
         if float(np.ptp(v)) <= UNIFORM * (hi - lo):

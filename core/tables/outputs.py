@@ -1,0 +1,189 @@
+"""What a table regresses: a target parameter, or one channel of it, on a unit scale; a conductor's
+complex IOR through its reflectivity and edge tint; and the direct fit's error.
+
+A conductor's eta and k trade off against each other in an image (the fit's Jacobian is
+ill-conditioned along them), so fits at neighbouring grid points land anywhere along that
+trade-off, and interpolating eta and k separately leaves it. Its reflectivity and edge tint
+(Gulbrandsen 2014, an exact reparameterisation, `core.appearance`) are what the image fixes: a
+table maps those and turns them back into eta and k."""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import Field
+
+from ..appearance import eta_k_from_reflectivity, reflectivity_edge_tint
+from ..model import Strict
+from ..schemas import ModelSpec, ParamSpec
+from .spec import CHANNELS
+
+ERROR = "error"
+"""The output that maps a direct fit's relative RMSE (its logarithm): what a fit reaches there."""
+PARTS = ("reflectivity", "edge_tint")
+
+
+class Output(Strict):
+    """One regressed quantity: a target parameter (or one channel of it), on its unit scale."""
+
+    param: str
+    kind: Literal["scalar", "rgb", "error"]
+    channel: int | None = Field(None, description="The channel of an RGB parameter mapped by a regression of its "
+                                                  "own (a full regression); None otherwise.")
+    per_channel: bool = Field(False, description="An RGB parameter whose one regression is applied to each channel "
+                                                 "with that channel of the source's colours (the separable form).")
+    lower: float
+    upper: float
+    scale: Literal["linear", "log"]
+    via: list[str] = Field(default_factory=list, description="For a conductor's reflectivity or edge tint (`param`): "
+                                                             "the target's eta and k it stands for.")
+    via_upper: list[float] = Field(default_factory=list, description="Their upper bounds (both have 0 below).")
+
+    @property
+    def label(self) -> str:
+        return self.param if self.channel is None else f"{self.param}.{CHANNELS[self.channel]}"
+
+    def to_unit(self, v) -> np.ndarray:
+        v = np.asarray(v, np.float64)
+        if self.scale == "log":
+            return (np.log(np.maximum(v, self.lower)) - math.log(self.lower)) / (math.log(self.upper) -
+                                                                                  math.log(self.lower))
+        return (v - self.lower) / (self.upper - self.lower)
+
+    def from_unit(self, t, dtype=np.float64) -> np.ndarray:
+        t = np.clip(np.asarray(t, dtype), dtype(0.0), dtype(1.0))
+        if self.scale == "log":
+            lo, hi = math.log(self.lower), math.log(self.upper)
+            return np.exp(dtype(lo) + t * dtype(hi - lo))
+        return dtype(self.lower) + t * dtype(self.upper - self.lower)
+
+
+def outputs_for(spec: ModelSpec, names: list[str], separable: bool) -> list[Output]:
+    """The regressions that map these target parameters (a conductor's eta and k as its reflectivity
+    and edge tint); then the direct fit's error."""
+    out = []
+    pair = spec.complex_ior if spec.complex_ior and all(n in names for n in spec.complex_ior) else None
+    for name in names:
+        if pair and name in pair:
+            continue
+        p: ParamSpec = spec.param(name)
+        out += _channels(p, separable, param=name, lower=p.lower, upper=p.upper, scale=p.scale)
+    if pair:
+        eta, k = (spec.param(n) for n in pair)
+        for part, upper in zip(PARTS, (0.999, 1.0)):
+            out += _channels(eta, separable and k.separable, param=part, lower=0.0, upper=upper, scale="linear",
+                             via=list(pair), via_upper=[eta.upper, k.upper])
+    out.append(Output(param=ERROR, kind="error", lower=1e-4, upper=10.0, scale="log"))
+    return out
+
+
+def _channels(p: ParamSpec, separable: bool, **common) -> list[Output]:
+    if p.kind == "rgb" and separable and p.separable:
+        return [Output(kind="rgb", per_channel=True, **common)]
+    if p.kind == "rgb":
+        return [Output(kind="rgb", channel=c, **common) for c in range(3)]
+    return [Output(kind="scalar", **common)]
+
+
+def target_value(params: dict[str, Any] | None, error: float | None, output: Output) -> float:
+    """A fit's value of one output, on the output's unit scale (NaN where the fit has none)."""
+    if params is None:
+        return math.nan
+    if output.kind == "error":
+        return float(output.to_unit(error)) if error else math.nan
+    if output.via:
+        if any(n not in params for n in output.via):
+            return math.nan
+        v = reflectivity_edge_tint(*(params[n] for n in output.via))[PARTS.index(output.param)]
+    else:
+        v = params.get(output.param)
+        if v is None:
+            return math.nan
+    if output.kind == "rgb":
+        v = float(np.mean(v)) if output.channel is None else float(np.asarray(v)[output.channel])
+    return float(output.to_unit(v))
+
+
+def finish(outputs: list[Output], values: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Predicted outputs as target parameters: a reflectivity and edge tint turned back into eta and k,
+    within their bounds, keeping the reflectivity where a bound cuts in (the edge tint gives way)."""
+    via = next((o for o in outputs if o.via), None)
+    if via is None:
+        return values
+    r, g = values.pop(PARTS[0]), values.pop(PARTS[1])
+    dtype = r.dtype
+    eta, k = within_bounds(np.asarray(r, np.float64), *eta_k_from_reflectivity(r, g), *via.via_upper)
+    values[via.via[0]], values[via.via[1]] = eta.astype(dtype), k.astype(dtype)
+    return values
+
+
+def within_bounds(r, eta, k, eta_max: float, k_max: float) -> tuple[np.ndarray, np.ndarray]:
+    """eta and k moved into [0, eta_max] x [0, k_max] along the curve of constant reflectivity r
+    (near r = 1 the edge tint asks for a k no bound allows): k held at its bound and eta solved for r,
+    the root nearest the eta asked for; eta held at its bound and k solved likewise."""
+    r = np.clip(r, 0.0, 0.999999)
+    over_k = k > k_max
+    if over_k.any():
+        kk = np.full_like(k, k_max)
+        a, b, c = r - 1.0, 2.0 * (r + 1.0), (r - 1.0) * (1.0 + kk * kk)
+        disc = np.sqrt(np.maximum(b * b - 4 * a * c, 0.0))
+        roots = np.stack([(-b + disc) / (2 * a), (-b - disc) / (2 * a)])
+        nearest = np.take_along_axis(roots, np.abs(roots - eta).argmin(axis=0)[None], axis=0)[0]
+        eta = np.where(over_k, np.maximum(nearest, 0.0), eta)
+        k = np.where(over_k, k_max, k)
+    over_eta = eta > eta_max
+    if over_eta.any():
+        n = np.minimum(eta, eta_max)
+        k = np.where(over_eta, np.sqrt(np.maximum((r * (n + 1) ** 2 - (n - 1) ** 2) / (1 - r), 0.0)), k)
+        eta = n
+    return np.clip(eta, 0.0, eta_max), np.clip(k, 0.0, k_max)
+
+
+def param_bounds(outputs: list[Output]) -> dict[str, tuple[float, float]]:
+    """Each mapped target parameter's bounds (eta and k for a reflectivity and edge tint)."""
+    out = {}
+    for o in outputs:
+        if o.via:
+            out.update({o.via[0]: (0.0, o.via_upper[0]), o.via[1]: (0.0, o.via_upper[1])})
+        elif o.kind != "error":
+            out[o.param] = (o.lower, o.upper)
+    return out
+
+
+LOG_GAIN = 0.9
+"""A logarithmic scale is taken when it cuts the cross-validated error (in the parameter's own units) to this."""
+
+
+def choose_scales(outputs: list[Output], grid_of) -> list[Output]:
+    """Each output on the scale, linear or logarithmic, that predicts the grid better (a roughness
+    that follows √α over a logarithmic α axis is a straight line in the logarithm; an α that follows
+    r² over a linear r axis is a parabola in the linear), judged by cross-validation of the
+    multilinear and RBF maps in the parameter's own units; the parameter's own scale unless the
+    other cuts that error to `LOG_GAIN` of it. ``grid_of``: an output's training data."""
+    out = []
+    for o in outputs:
+        grid = grid_of(o)
+        values = o.from_unit(grid.y)[grid.used]
+        if o.kind == "error" or not values.size or float(values.min()) <= 0:
+            out.append(o)
+            continue
+        other = o.model_copy(update={"scale": "linear"} if o.scale == "log" else
+                             {"scale": "log", "lower": max(o.lower, float(values.min()) / 2)})
+        own, alt = (_cv_error(enc, grid_of(enc), values) for enc in (o, other))
+        out.append(other if alt < LOG_GAIN * own else o)
+    return out
+
+
+def _cv_error(enc: Output, grid, values: np.ndarray) -> float:
+    from .maps import cv_predictions
+
+    errors = []
+    for method, h in (("multilinear", None), ("rbf", 0.0)):
+        try:
+            pred = enc.from_unit(cv_predictions(method, grid, h))[grid.used]
+        except (ValueError, np.linalg.LinAlgError):
+            continue
+        errors.append(float(np.sqrt(np.nanmean((pred - values) ** 2))))
+    return min(errors, default=math.inf)
