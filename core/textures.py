@@ -5,8 +5,8 @@ colour map is decoded through OpenColorIO; a data map is read as it is), and its
 a texture is an array of linear values: H x W for a scalar parameter (an RGB image gives its
 luminance, as renderers turn a colour into a number, or the one channel its `channel` names),
 H x W x 3 for an RGB one; a colour with an alpha channel is read as stored (straight), not
-multiplied by it. Written, a colour map (an RGB parameter within [0, 1]) is a 16-bit sRGB PNG, a
-data map within [0, 1] a 16-bit linear PNG, and anything beyond (an IOR) a float EXR.
+multiplied by it. Written, a colour map (an RGB parameter within [0, 1]) is a 16-bit sRGB PNG, and a
+data map (a roughness, an IOR) a float EXR, read as it is.
 
 The probe sphere's texture coordinates, which every adapter that renders textures realises:
 u = φ / 2π and v = θ / π of the sphere's own frame (its pole along the image's up, +y; θ = 0 at
@@ -135,10 +135,16 @@ def resized(values: np.ndarray, width: int, height: int) -> np.ndarray:
     return out[..., 0] if values.ndim == 2 else out
 
 
+PNG_COMPRESSION = 3
+"""zlib's level for the 16-bit PNGs of colour maps: a 2048² map writes in about half level 6's time,
+about 17 % larger."""
+
+
 def kind_of_file(lower: float, upper: float, rgb: bool) -> tuple[str, str]:
-    """How a target map of values in [lower, upper] is written: (extension, colorspace)."""
-    if lower >= 0.0 and upper <= 1.0:
-        return ".png", ("srgb" if rgb else "linear")
+    """How a target map of values in [lower, upper] is written: (extension, colorspace). A colour map
+    (RGB within [0, 1]) as a 16-bit sRGB PNG; a data map as a float EXR, read as it is."""
+    if rgb and lower >= 0.0 and upper <= 1.0:
+        return ".png", "srgb"
     return ".exr", "linear"
 
 
@@ -158,6 +164,8 @@ def encode(values: np.ndarray, suffix: str, colorspace: str) -> bytes:
         spec = oiio.ImageSpec(arr.shape[1], arr.shape[0], arr.shape[2], fmt)
         if suffix == ".exr":
             spec.attribute("compression", "zip")
+        else:
+            spec.attribute("png:compressionLevel", PNG_COMPRESSION)
         out = oiio.ImageOutput.create(str(path))
         if out is None or not out.open(str(path), spec):
             raise ConfigError(f"cannot write a texture: {oiio.geterror()}")

@@ -145,7 +145,7 @@ def test_a_textured_material_file_through_a_table_without_renders(tmp_path):
     assert done.returncode == 0, done.stderr[-2000:]
     doc = json.loads((tmp_path / "o" / "lookup.json").read_text())
     assert {m["param"] for m in doc["textures"]["maps"]} == {"base_color", "roughness"}
-    assert (tmp_path / "o" / "material.blend").exists() and (tmp_path / "o" / "map-roughness.png").exists()
+    assert (tmp_path / "o" / "material.blend").exists() and (tmp_path / "o" / "map-roughness.exr").exists()
     # A fit cannot take a textured source: one line says what to do.
     one_line_error(remap("--adapter", "cycles", "--model", "principled", "--source", material, "--out",
                          tmp_path / "f"), "textures", "--table")

@@ -217,3 +217,33 @@ def test_the_digest_covers_the_map_not_the_builds_timing(tmp_path):
     moved = table.model_copy(update={"points": [table.points[0].model_copy(update={"params": {
         **table.points[0].params, "alpha": 0.3}}), *table.points[1:]]})
     assert moved.digest != table.digest
+
+
+def test_a_conductors_eta_and_k_are_mapped_as_reflectivity_and_edge_tint():
+    from brdfremap.adapters.mitsuba.models import MODELS
+    from brdfremap.core.appearance import eta_k_from_reflectivity, reflectivity_edge_tint
+    from brdfremap.core.tables.outputs import finish, outputs_for, target_value, within_bounds
+
+    outs = outputs_for(MODELS["roughconductor"], ["eta", "k", "alpha"], separable=True)
+    assert [o.label for o in outs] == ["alpha", "reflectivity", "edge_tint", "error"]
+    eta, k = (0.2, 0.9, 1.4), (3.9, 2.4, 1.6)
+    refl = next(o for o in outs if o.param == "reflectivity")
+    r, g = reflectivity_edge_tint(eta, k)
+    assert target_value({"eta": eta, "k": k}, None, refl) == pytest.approx(float(np.mean(r)) / 0.999)
+    back = finish(outs, {"reflectivity": r[None], "edge_tint": g[None], "alpha": np.array([0.1])})
+    assert np.allclose(back["eta"][0], eta) and np.allclose(back["k"][0], k) and "reflectivity" not in back
+    # Near r = 1 an edge tint can ask for a k beyond its bound: k held there, eta moved, r kept.
+    r = np.array([0.95, 0.99])
+    e2, k2 = within_bounds(r, *eta_k_from_reflectivity(r, np.array([0.95, 0.95])), 8.0, 10.0)
+    assert (k2 <= 10.0).all() and np.allclose(reflectivity_edge_tint(e2, k2)[0], r)
+
+
+def test_each_output_takes_the_scale_that_predicts_it_better(tmp_path):
+    from brdfremap.core.tables.outputs import choose_scales
+    from brdfremap.core.tables.table import grid_of
+
+    table = synthetic_table(tmp_path)  # Ward's alpha = 1.1 x the source's, over a log axis: linear in the log
+    linear = [o.model_copy(update={"scale": "linear"}) if o.param == "alpha" else o for o in table.outputs]
+    table = table.model_copy(update={"outputs": linear})
+    chosen = {o.param: o.scale for o in choose_scales(table.outputs, lambda o: grid_of(table, o))}
+    assert chosen["alpha"] == "log" and chosen["error"] == "log"
