@@ -119,6 +119,21 @@ class ModelMismatch(_Finding):
                 "gets), not a failed fit")
 
 
+class TableMismatch(_Finding):
+    """A table's lookup above the threshold, but about as close as the table's direct fits get there:
+    the target model's mismatch, not the table's."""
+
+    kind: Literal["table_mismatch"] = "table_mismatch"
+    error: float
+    expected: float = Field(description="The relative RMSE the table's direct fits reach about these source values.")
+    threshold: float
+
+    def sentence(self) -> str:
+        return (f"error {self.error:.1%} above the {self.threshold:.0%} threshold, about what the table's direct fits "
+                f"reach here ({self.expected:.1%}): a model mismatch (the closest this target model gets), not "
+                "the table's")
+
+
 class NoEffect(_Finding):
     kind: Literal["no_effect"] = "no_effect"
 
@@ -335,7 +350,7 @@ class NoisePolished(_Note):
 
 
 Finding = Annotated[
-    Union[ErrorAboveThreshold, ModelMismatch, HeldOutAbove, CannotResolve, ImagePrecision, NoEffect, IllConditioned,
+    Union[ErrorAboveThreshold, ModelMismatch, TableMismatch, HeldOutAbove, CannotResolve, ImagePrecision, NoEffect, IllConditioned,
           NotAtMinimum,
           PinnedOnBound, RendererAlters, ValidationSkipped, NothingFitted, TableLookup, TexturedAbove, TexturedNotes,
           StartKept, ChoiceTried, SchemeChosen, DeadParameters,
@@ -359,8 +374,8 @@ class Verdict(Strict):
         problems = [f for f in findings if f.severity == "unreliable"]
         if not problems:
             status: Status = "ok"
-        elif any(isinstance(f, ModelMismatch) for f in problems) and all(
-                isinstance(f, (ModelMismatch, HeldOutAbove)) for f in problems):
+        elif any(isinstance(f, (ModelMismatch, TableMismatch)) for f in problems) and all(
+                isinstance(f, (ModelMismatch, TableMismatch, HeldOutAbove)) for f in problems):
             status = "mismatch"  # the closest this model gets, under the held-out lights too
         else:
             status = "unreliable"

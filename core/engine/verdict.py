@@ -16,6 +16,7 @@ from ..findings import (
     ImagePrecision,
     ModelMismatch,
     NoEffect,
+    TableMismatch,
     NotAtMinimum,
     NothingFitted,
     PinnedOnBound,
@@ -28,6 +29,8 @@ from ..metrics import beyond_noise, clipped_at, eight_bit
 from .assess import Assessment
 from .results import StageResult, Validation
 
+LOOKUP_SLACK = 1.2
+"""A table's lookup within this factor of what the table's direct fits reach there is the model's mismatch."""
 SCENE_ADVICE = ("render more samples (--spp), or fit under an environment (a scene whose lights include "
                 "{type: environment}), which resolves sharp highlights a point light leaves sub-pixel")
 HELD_OUT_ADVICE = "raise the scene's samples (the validation renders take 4x them, at least 64)"
@@ -110,12 +113,18 @@ def _image_problems(ev: Evidence) -> list:
 
 def judge(ev: Evidence, notes: list) -> Verdict:
     """The findings in order of weight, then ``notes`` (what the schedule did) and the dead parameters.
-    With nothing fitted there is no fit to question: only the errors, and no talk of a mismatch."""
+    With nothing fitted there is no fit to question: only the errors, and a mismatch only where a
+    table's lookup is about as close as the table's direct fits get there."""
     errors = _errors(ev)
     fit = (_fit_problems(ev) if ev.fitted else []) + _image_problems(ev)
     scene = [p for p in errors if isinstance(p, ErrorAboveThreshold)]
     if ev.fitted and scene and not fit and all(s.converged for s in ev.stages):
         errors = [ModelMismatch(error=ev.error, threshold=ev.threshold, beyond_noise=ev.beyond_noise)
+                  if p is scene[0] else p for p in errors]
+    lookup = next((n for n in notes if isinstance(n, TableLookup)), None)
+    if not ev.fitted and scene and lookup is not None and lookup.expected_error is not None and \
+            ev.error <= max(LOOKUP_SLACK * lookup.expected_error, lookup.expected_error + ev.noise_floor):
+        errors = [TableMismatch(error=ev.error, expected=lookup.expected_error, threshold=ev.threshold)
                   if p is scene[0] else p for p in errors]
     problems = errors + fit + [RendererAlters(detail=n) for n in ev.renderer_notes]
     extra: list = [ValidationSkipped(condition=k, why=v) for k, v in ev.validation.skipped.items()]

@@ -125,3 +125,18 @@ def test_a_uniform_float_image_is_neither_clipped_nor_8_bit():
     clipped = np.minimum(ramp, 1.0)
     assert clipped_at(ramp) is None and clipped_at(clipped) is not None
     assert eight_bit(np.round(clipped * 255) / 255) == "linear"
+
+
+def test_a_lookup_about_as_close_as_the_tables_fits_is_a_mismatch_not_a_failure():
+    from brdfremap.core.findings import TableLookup
+
+    def judged(error, expected):
+        ev = Evidence(error=error, noise_floor=0.005, threshold=0.05, resolve_limit=0.10,
+                      assessment=Assessment(condition=None, no_effect=False), stages=[], cond_limit=1e4,
+                      renderer_notes=[], fitted=False)
+        return judge(ev, [TableLookup(table="t", method="rbf", expected_error=expected)])
+
+    near = judged(0.16, 0.15)
+    assert near.status == "mismatch" and "about what the table's direct fits reach here (15.0%)" in near.reason
+    assert judged(0.30, 0.15).status == "unreliable" and judged(0.03, 0.15).status == "ok"
+    assert not any(f.kind == "nothing_fitted" for f in near.findings)
