@@ -49,7 +49,7 @@ def accuracy(args) -> None:
             table = read_table(path)
             tmap = TableMap(table)
             spec = table.spec
-            scene = spec.scene.scene(Path(path).resolve())
+            scene = table.scene
             settings = spec.options.model_copy(update={"validation": "none"})
             drawn = table.layout.draw(args.n, ACCURACY_SEED)
             store = Store(Path(args.out) / Path(path).resolve().name)

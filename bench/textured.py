@@ -50,7 +50,7 @@ def main() -> None:
     src_spec = registry.get(spec.source.adapter).models[spec.source.model]
     tgt_spec = registry.get(spec.target.adapter).models[spec.target.model]
     drawn = table.layout.draw(n * n, args.seed)
-    scene = spec.scene.scene(Path(args.table).resolve())
+    scene = table.scene
     settings = spec.options.model_copy(update={"validation": "none"})
     tasks, lookups = [], []
     for i, values in enumerate(drawn):

@@ -4,6 +4,7 @@ import json
 
 import yaml
 
+from brdfremap.core.scene import ProbeScene
 from brdfremap.core.tables import Layout, load_table_spec
 from brdfremap.core.tables.outputs import outputs_for
 from brdfremap.core.tables.table import TABLE_SCHEMA_VERSION, BuildRecord, PointRecord, Table
@@ -36,7 +37,7 @@ def synthetic_table(tmp_path) -> Table:
                                   verdict="ok", used=True))
     points[5] = points[5].model_copy(update={"used": False, "left_out": "not at a minimum", "verdict": "unreliable",
                                              "params": {**points[5].params, "alpha": 0.9}})
-    table = Table(schema_version=TABLE_SCHEMA_VERSION, tool="test", name="synthetic", spec=spec,
+    table = Table(schema_version=TABLE_SCHEMA_VERSION, tool="test", name="synthetic", spec=spec, scene=ProbeScene(),
                   source_kinds=layout.kinds, source_params={"distribution": "beckmann", "material": "none",
                                                              "eta": [0, 0, 0], "k": [1, 1, 1]},
                   target_params=ward.complete({"diffuse_reflectance": 0.0}), versions={"mitsuba": "2"},
@@ -81,6 +82,7 @@ def principled_table(tmp_path) -> Table:
         points.append(PointRecord(id=f"g{i}", index=list(idx), values=v, params=params, error=0.1, verdict="mismatch",
                                   used=True))
     table = Table(schema_version=TABLE_SCHEMA_VERSION, tool="test", name="synthetic principled", spec=spec,
+                  scene=ProbeScene(),
                   source_kinds=layout.kinds, source_params={"distribution": "beckmann", "material": "none",
                                                              "eta": [0, 0, 0], "k": [1, 1, 1]},
                   target_params=base, versions={"mitsuba": "2", "cycles": "1"},

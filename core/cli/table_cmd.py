@@ -91,15 +91,36 @@ def lookup(args: argparse.Namespace) -> int:
     and judged as a fit is (or not at all with --no-render)."""
     from ..execute import adapter_pool
     from ..executors import workers
+    from ..runner import Runner, Task
+    from ..store import Store, owned
+    from ..tables.lookup import write_answer
+    from .progress import RenderProgress
+    from .remap_cmd import print_report
+
+    resolved, answer, header, registry = _lookup_job(args)
+    if args.no_render:
+        with owned(args.out) as folder, adapter_pool(registry) as adapters:
+            files = write_answer(folder, resolved, answer, adapters[resolved.job.target.adapter], str(args.table))
+        if not args.quiet:
+            print(header, file=sys.stderr)
+        _print_answer(resolved, answer, folder, files)
+        return 0
+    with owned(args.out) as folder, workers() as w, adapter_pool(registry):
+        runner = Runner(Store(folder), w, renderer_files=tuple(registry.loaded_files()), quiet=True,
+                        render_progress=RenderProgress(not args.quiet, header), reuse=not args.force)
+        (done,) = runner.run([Task("", resolved.job, str(args.source))])
+    print_report(done.report, folder, resumed=done.resumed)
+    return 0
+
+
+def _lookup_job(args: argparse.Namespace):
+    """The lookup as a job, checked: (resolved job, answer, progress header, registry)."""
     from ..job import Job, Where, model_of, resolve
     from ..plugins import collect_adapters
-    from ..runner import Runner, Task
     from ..schemas import load_material
-    from ..store import Store, owned
     from ..tables import TableMap, read_table
-    from ..tables.lookup import axis_values, look_up, write_answer
+    from ..tables.lookup import axis_values, look_up
     from ..tables.texels import mean_values, read_inputs
-    from .remap_cmd import print_report
 
     t0 = time.perf_counter()
     if args.fix:
@@ -121,34 +142,13 @@ def lookup(args: argparse.Namespace) -> int:
     loaded = time.perf_counter() - t0
     answer = look_up(table, tmap, values)
     answer.lookup = answer.lookup.model_copy(update={"file": str(_table_file(args.table))})
-    job = Job(source=source, target=tgt, scene=options.scene_from(args, table.spec.scene.scene(_here(args.table))),
+    job = Job(source=source, target=tgt, scene=options.scene_from(args, table.scene),
               settings=options.settings_from(args, table.spec.options), label=str(args.source), lookup=answer.lookup)
     resolved = resolve(job, registry, Where(source_file=str(args.source)))
     header = (f"remap {source.adapter}:{source.model} -> {tgt.adapter}:{tgt.model} through the table {table.name!r} "
               f"({tmap.method} map): looked up in {answer.seconds * 1e3:.3f} ms (the table read in "
               f"{loaded * 1e3:.0f} ms)")
-    if args.no_render:
-        with owned(args.out) as folder, adapter_pool(registry) as adapters:
-            files = write_answer(folder, resolved, answer, adapters[tgt.adapter], str(args.table))
-        if not args.quiet:
-            print(header, file=sys.stderr)
-        _print_answer(resolved, answer, folder, files)
-        return 0
-    with owned(args.out) as folder, workers() as w, adapter_pool(registry):
-        from .progress import RenderProgress
-
-        runner = Runner(Store(folder), w, renderer_files=tuple(registry.loaded_files()), quiet=True,
-                        render_progress=RenderProgress(not args.quiet, header), reuse=not args.force)
-        (done,) = runner.run([Task("", resolved.job, str(args.source))])
-    print_report(done.report, folder, resumed=done.resumed)
-    return 0
-
-
-def _here(table_arg: str):
-    from pathlib import Path
-
-    p = Path(table_arg)
-    return (p if p.is_dir() else p.parent).resolve()
+    return resolved, answer, header, registry
 
 
 def _table_file(table_arg: str):

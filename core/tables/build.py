@@ -158,8 +158,11 @@ def leave_out_cliffs(draft: Table) -> list[PointRecord]:
             miss = np.abs(cv_predictions("rbf", grid, 1e-3) - grid.y)
         except (ValueError, np.linalg.LinAlgError):
             continue
-        mad = float(np.nanmedian(miss[grid.used])) if grid.used.any() else 0.0
-        for i in np.flatnonzero(grid.used & (miss > max(CLIFF_SPAN, CLIFF_MAD * mad))):
+        seen = grid.used & np.isfinite(miss)
+        if not seen.any():
+            continue
+        mad = float(np.median(miss[seen]))
+        for i in np.flatnonzero(seen & (miss > max(CLIFF_SPAN, CLIFF_MAD * mad))):
             if miss[i] > worst.get(int(i), (0.0, ""))[0]:
                 worst[int(i)] = (float(miss[i]), o.label)
     cap = int(CLIFF_SHARE * len(draft.points))
@@ -208,20 +211,20 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
         points = [record(t.slot.split("/")[1], v, d, idx) for t, (idx, v), d in zip(grid_tasks, p.grid, grid_done)]
         need = len(p.layout.dims) + 2
         if sum(pt.used for pt in points) < need:
-            write_points_csv(folder / "points.csv", _draft(p, file, spec, points, [], [], None))
+            write_points_csv(folder / "points.csv", _draft(p, file, spec, points, [], [], None, scene))
             raise ConfigError(f"{sum(pt.used for pt in points)} of {len(points)} grid points gave a fit the map can "
                               f"use, and a map over {need - 2} dimensions needs {need}: see points.csv for why",
                               file=file)
         held = [record(t.slot.split("/")[1], v, d) for t, v, d in zip(held_tasks, p.held, held_done)]
         first = next(d.report for d, pt in zip(grid_done, points) if pt.used)
-        draft = _draft(p, file, spec, points, held, _mapped(p, points, grid_done), first)
+        draft = _draft(p, file, spec, points, held, _mapped(p, points, grid_done), first, scene)
         draft = draft.model_copy(update={"outputs": choose_scales(draft.outputs, lambda o: grid_of(draft, o))})
         draft = draft.model_copy(update={"points": leave_out_cliffs(draft)})
         draft = draft.model_copy(update={"candidates": fit_candidates(draft)})
         if all(c.problem for c in draft.candidates.values()):
             raise ConfigError("no map could be fitted to the grid: " + "; ".join(
                 f"{m}: {c.problem}" for m, c in draft.candidates.items()), file=file)
-        candidates = _check_holdout(p, registry, runner, draft, scene)
+        candidates = _check_holdout(p, registry, runner, draft)
         chosen, why = choose(candidates)
         table = draft.model_copy(update={"candidates": candidates, "chosen": chosen, "chosen_why": why})
         renders, seconds = checks_account(folder, table)
@@ -237,12 +240,12 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
     return table
 
 
-def _draft(p: Plan, file: str, spec: TableSpec, points, held, names, first) -> Table:
+def _draft(p: Plan, file: str, spec: TableSpec, points, held, names, first, scene) -> Table:
     """The table without its maps' account yet."""
     from .. import __version__
 
     return Table(schema_version=TABLE_SCHEMA_VERSION, tool=f"brdf-remap {__version__}",
-                 name=spec.name or Path(file).stem, spec=spec, source_kinds=p.layout.kinds,
+                 name=spec.name or Path(file).stem, spec=spec, scene=scene, source_kinds=p.layout.kinds,
                  source_params=p.source_params,
                  target_params=p.target_spec.complete(first.params if first else {}),
                  versions=first.job.versions if first else {}, outputs=outputs_for(p.target_spec, names,
@@ -269,7 +272,7 @@ def checks_account(folder: Path, table: Table) -> tuple[int, float]:
     return renders, seconds
 
 
-def _check_holdout(p: Plan, registry: AdapterRegistry, runner: Runner, draft: Table, scene) -> dict[str, Candidate]:
+def _check_holdout(p: Plan, registry: AdapterRegistry, runner: Runner, draft: Table) -> dict[str, Candidate]:
     """Each candidate map's lookup of each held-out material, rendered and judged (no held-out lights:
     the scene's error is what is compared with the direct fit's)."""
     fitted = [(i, h) for i, h in enumerate(draft.holdout) if h.error is not None]
@@ -285,7 +288,7 @@ def _check_holdout(p: Plan, registry: AdapterRegistry, runner: Runner, draft: Ta
             params, expected = tmap.params(h.values)
             lookup = Lookup(table=draft.name, digest="draft", method=method, params=params,
                             expected_error=expected)
-            tasks.append(_task(p, registry, f"checks/{method}/{h.id}", h.values, f"{method} {h.id}", scene,
+            tasks.append(_task(p, registry, f"checks/{method}/{h.id}", h.values, f"{method} {h.id}", draft.scene,
                                settings, lookup))
             where.append((method, i))
     results = runner.run(tasks)

@@ -185,5 +185,7 @@ def _cv_error(enc: Output, grid, values: np.ndarray) -> float:
             pred = enc.from_unit(cv_predictions(method, grid, h))[grid.used]
         except (ValueError, np.linalg.LinAlgError):
             continue
-        errors.append(float(np.sqrt(np.nanmean((pred - values) ** 2))))
+        ok = np.isfinite(pred)
+        if ok.any():
+            errors.append(float(np.sqrt(np.mean((pred[ok] - values[ok]) ** 2))))
     return min(errors, default=math.inf)

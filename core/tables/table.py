@@ -17,6 +17,7 @@ from pydantic import Field, ValidationError, computed_field
 from ..configio import validation_message
 from ..errors import ConfigError
 from ..model import Strict, WithDerived
+from ..scene import ProbeScene
 from .maps import Grid, Regressor, build
 from .outputs import ERROR, Output, finish, target_value
 from .spec import Layout, TableSpec
@@ -82,6 +83,8 @@ class Table(WithDerived):
     tool: str
     name: str
     spec: TableSpec
+    scene: ProbeScene = Field(description="The probe scene the fits ran under (the spec's, resolved): lookups "
+                                          "render under it.")
     source_kinds: dict[str, str] = Field(description="Each axis's kind in the source model (scalar, rgb).")
     source_params: dict[str, Any] = Field(description="The source parameters every point shares (completed with "
                                                       "the model's defaults); a lookup checks a material against "
