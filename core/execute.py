@@ -118,8 +118,8 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
                        smooth=resolved.source_spec.smooth or resolved.target_spec.smooth)
     renders = ProbeRenders(source, resolved.source_params, resolved.source_spec, target, fit.scene, given=job.scene,
                            given_noise=fit.scene_noise)
-    informed = job.settings.start == "informed" and job.lookup is None
-    start = informed_start(resolved, adapters) if informed else {}
+    informed = job.settings.start == "informed" and job.lookup is None and job.start is None
+    start = informed_start(resolved, adapters) if informed else given_start(resolved)
     free = fitted(resolved, start) if job.lookup is None else []
     # A textured source is a lookup (nothing fitted): its maps and their check come first, for the verdict.
     texturing = texture_result(resolved, adapters[src.adapter], adapters[tgt.adapter], dict(resolved.base)) \
@@ -217,6 +217,13 @@ def informed_start(resolved: Resolved, adapters: AdapterPool) -> dict[str, Value
         if all(map(math.isfinite, v if isinstance(v, tuple) else (v,))):  # type: ignore[arg-type]
             out[name] = v
     return out
+
+
+def given_start(resolved: Resolved) -> dict[str, Value]:
+    """The job's own start (`Job.start`, coerced by `resolve`), or {}."""
+    spec = resolved.target_spec
+    return {k: spec.param(k).clip(tuple(v) if isinstance(v, list) else v) if spec.param(k).kind != "choice" else v
+            for k, v in (resolved.job.start or {}).items()}
 
 
 def fitted(resolved: Resolved, start: dict[str, Value]) -> list[str]:

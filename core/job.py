@@ -61,6 +61,9 @@ class Job(Strict):
                                                                        "recorded by `resolve`; in the key.")
     lookup: Lookup | None = Field(None, description="Parameters from a remap table: rendered and judged, not "
                                                     "fitted.")
+    start: dict[str, Any] | None = Field(None, description="Target parameters the fit starts from instead of the "
+                                                           "exporters' conversion (a table's continuation from its "
+                                                           "neighbours' fits).")
 
     def key(self) -> str:
         """The hash of everything that determines the result (the engine version included),
@@ -78,6 +81,8 @@ class Job(Strict):
         # (and their reports are read as they are: report.READS_FROM).
         if self.lookup is not None:
             doc["lookup"] = self.lookup.model_dump(mode="json", exclude={"file"})
+        if self.start is not None:
+            doc["start"] = self.start
         if self.source.textures:  # an image by its content, not its path
             doc["textures"] = {k: t.model_dump(mode="json", exclude={"file"}) for k, t in self.source.textures.items()}
         blob = json.dumps(doc, sort_keys=True, separators=(",", ":"))
@@ -149,6 +154,11 @@ def resolve(job: Job, registry: AdapterRegistry, where: Where = Where()) -> Reso
         looked = {k: v for k, v in job.lookup.params.items() if k not in fixed}
         base.update({k: v for k, v in tgt_spec.complete(looked, file=where.target_file,
                                                          prefix="lookup.params").items() if k in looked})
+    start = None
+    if job.start is not None:  # a fixed value is the job's, not the start's
+        given = {k: v for k, v in job.start.items() if k not in fixed}
+        start = _plain({k: v for k, v in tgt_spec.complete(given, file=where.target_file, prefix="start").items()
+                        if k in given})
     _check_fixed(tgt_spec, base, fixed, where)
     _check_sampling(job, where)
     _check_scene(registry, job, where)
@@ -160,6 +170,7 @@ def resolve(job: Job, registry: AdapterRegistry, where: Where = Where()) -> Reso
         "versions": versions,
         "lookup": None if job.lookup is None else job.lookup.model_copy(update={"params": _plain(
             {k: base[k] for k in job.lookup.params})}),
+        "start": start,
     })
     return Resolved(canonical, src_spec, tgt_spec, src_params, base, free, fixed)
 

@@ -71,7 +71,8 @@ class Metrics(_Strict):
 
 class Start(_Strict):
     informed: bool = Field(description="The fit started from the exporters' conversion of the source.")
-    params: dict[str, Any] = Field(description="That conversion, where it was used.")
+    params: dict[str, Any] = Field(description="That conversion, or the job's own start (`job.start`), where one "
+                                               "was used.")
 
 
 class FitSceneRecord(_Strict):
@@ -153,7 +154,8 @@ class Report(WithDerived):
         """SHA-256 of the rest of the document: a report edited after it was written is not
         taken for the job's result. Fields of format 4 are left out while absent (see `READS_FROM`)."""
         doc = self.model_dump(mode="json", exclude={"digest"})
-        for container, key in ((doc, "textures"), (doc["job"], "lookup"), (doc["job"]["source"], "textures")):
+        for container, key in ((doc, "textures"), (doc["job"], "lookup"), (doc["job"], "start"),
+                               (doc["job"]["source"], "textures")):
             if not container.get(key):
                 container.pop(key, None)
         return hashlib.sha256(json.dumps(doc, sort_keys=True, ensure_ascii=False).encode()).hexdigest()
@@ -189,7 +191,7 @@ def build_report(resolved: Resolved, result: EngineResult, *, start: dict, deriv
                                                                                     result.noise_floor),
                         threshold=result.threshold, start_error=result.start_error,
                         jacobian_condition=_finite(result.jacobian_condition)),
-        start=Start(informed=bool(start), params=rounded(start)), renders=result.renders,
+        start=Start(informed=bool(start) and job.start is None, params=rounded(start)), renders=result.renders,
         renders_by_resolution=renders_by_resolution, source_renders=source_renders, seconds=seconds,
         scheme=result.scheme, scheme_used=result.scheme_used, verdict=v.status, findings=v.findings,
         validation=result.validation.checks, validation_skipped=result.validation.skipped, stages=result.stages,

@@ -160,6 +160,8 @@ def _start(r: Report) -> tuple[str, str]:
         expected = f"; direct fits here reach about {lk.expected_error:.1%}" if lk.expected_error is not None else ""
         return "table", f"{lk.table} ({lk.method} map): nothing fitted{expected}" + (
             f"; clamped: {'; '.join(lk.outside)}" if lk.outside else "")
+    if r.job.start is not None:
+        return "start", "the job's own: " + format_params(r.start.params)
     return "start", ("the exporters' conversion: " + format_params(r.start.params) if r.start.informed
                      else "the target's defaults")
 

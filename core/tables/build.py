@@ -137,6 +137,46 @@ def _mapped(p: Plan, points: list[PointRecord], done: list[Done]) -> list[str]:
     return [n for n in p.target_spec.names if n in fitted]
 
 
+CONTINUE_SLACK, CONTINUE_NOISE, CONTINUE_SMOOTHING = 1.02, 0.5, 1e-3
+"""A refit from the neighbours' map replaces a point's first fit when its error is at most this much
+of the first's, plus this much of the render noise (at the noise, two fits are alike); the
+neighbours' map is an RBF of this smoothing."""
+
+
+def continue_points(p: Plan, registry: AdapterRegistry, runner: Runner, draft: Table) -> list[PointRecord]:
+    """Each grid point refitted from one start, the map of the other points' fits (continuation: a
+    fit that fell into another optimum than its neighbours' is led into theirs, where it is as
+    good); the refit replaces the first fit where its error is within `CONTINUE_SLACK` of it (and half
+    the render noise).
+    Stored as `points/<id>/continued/`."""
+    settings = draft.spec.options.model_copy(update={"starts": 1})
+    tasks, which = [], []
+    for i, pt in enumerate(draft.points):
+        if pt.params is None:
+            continue
+        start = _neighbours_map(draft, i).params(pt.values)[0]
+        job = Job(source=_material(p, pt.values, pt.id), target=draft.spec.target, scene=draft.scene,
+                  settings=settings, label=f"{p.file} points/{pt.id} continued", start=start)
+        tasks.append(Task(f"points/{pt.id}/continued", resolve(job, registry).job, f"{pt.id} continued"))
+        which.append(i)
+    points = list(draft.points)
+    for i, d in zip(which, runner.run(tasks)):
+        first, again = points[i], d.report
+        if again is not None and first.error is not None and again.metrics.relative_rmse <= (
+                CONTINUE_SLACK * first.error + CONTINUE_NOISE * (first.noise_floor or 0.0)):
+            points[i] = record(first.id, first.values, d, tuple(first.index)).model_copy(update={
+                "continued": True, "first_error": first.error})
+    return points
+
+
+def _neighbours_map(draft: Table, i: int) -> TableMap:
+    """The map of every used point but the i-th (a thin-plate RBF, lightly smoothed)."""
+    others = [pt.model_copy(update={"used": False}) if j == i else pt for j, pt in enumerate(draft.points)]
+    hyper = {o.label: CONTINUE_SMOOTHING for o in draft.outputs}
+    return TableMap(draft.model_copy(update={"points": others, "candidates": {"rbf": Candidate(
+        method="rbf", hyper=hyper, cv_rms={})}}), "rbf")
+
+
 CLIFF_SPAN, CLIFF_MAD, CLIFF_SHARE = 0.15, 6.0, 0.1
 """A used point is a cliff when a smooth map of its neighbours misses one of its parameters by over
 CLIFF_SPAN of the parameter's range and CLIFF_MAD times the points' median miss; at most
@@ -219,6 +259,8 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
         first = next(d.report for d, pt in zip(grid_done, points) if pt.used)
         draft = _draft(p, file, spec, points, held, _mapped(p, points, grid_done), first, scene)
         draft = draft.model_copy(update={"outputs": choose_scales(draft.outputs, lambda o: grid_of(draft, o))})
+        if spec.continuation:
+            draft = draft.model_copy(update={"points": continue_points(p, registry, runner, draft)})
         draft = draft.model_copy(update={"points": leave_out_cliffs(draft)})
         draft = draft.model_copy(update={"candidates": fit_candidates(draft)})
         if all(c.problem for c in draft.candidates.values()):

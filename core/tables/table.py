@@ -42,6 +42,8 @@ class PointRecord(Strict):
     renders: int = 0
     seconds: float = 0.0
     key: str = ""
+    continued: bool = Field(False, description="The refit from its neighbours' map replaced the first fit.")
+    first_error: float | None = Field(None, description="The first fit's relative RMSE, where the refit replaced it.")
 
 
 class Candidate(Strict):
