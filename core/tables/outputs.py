@@ -160,8 +160,9 @@ def choose_scales(outputs: list[Output], grid_of) -> list[Output]:
     """Each output on the scale, linear or logarithmic, that predicts the grid better (a roughness
     that follows √α over a logarithmic α axis is a straight line in the logarithm; an α that follows
     r² over a linear r axis is a parabola in the linear), judged by cross-validation of the
-    multilinear and RBF maps in the parameter's own units; the parameter's own scale unless the
-    other cuts that error to `LOG_GAIN` of it. ``grid_of``: an output's training data."""
+    multilinear and RBF maps in the units of the parameter's own scale (a log parameter's errors are
+    relative: 0.004 off an α of 0.01 is a highlight twice as bright); the parameter's own scale
+    unless the other cuts that error to `LOG_GAIN` of it. ``grid_of``: an output's training data."""
     out = []
     for o in outputs:
         grid = grid_of(o)
@@ -171,21 +172,22 @@ def choose_scales(outputs: list[Output], grid_of) -> list[Output]:
             continue
         other = o.model_copy(update={"scale": "linear"} if o.scale == "log" else
                              {"scale": "log", "lower": max(o.lower, float(values.min()) / 2)})
-        own, alt = (_cv_error(enc, grid_of(enc), values) for enc in (o, other))
+        own, alt = (_cv_error(enc, grid_of(enc), o.to_unit(values), o) for enc in (o, other))
         out.append(other if alt < LOG_GAIN * own else o)
     return out
 
 
-def _cv_error(enc: Output, grid, values: np.ndarray) -> float:
+def _cv_error(enc: Output, grid, truth: np.ndarray, judge: Output) -> float:
+    """Cross-validated RMS error of an encoding's maps, in ``judge``'s unit scale."""
     from .maps import cv_predictions
 
     errors = []
     for method, h in (("multilinear", None), ("rbf", 0.0)):
         try:
-            pred = enc.from_unit(cv_predictions(method, grid, h))[grid.used]
+            pred = judge.to_unit(enc.from_unit(cv_predictions(method, grid, h))[grid.used])
         except (ValueError, np.linalg.LinAlgError):
             continue
         ok = np.isfinite(pred)
         if ok.any():
-            errors.append(float(np.sqrt(np.mean((pred[ok] - values[ok]) ** 2))))
+            errors.append(float(np.sqrt(np.mean((pred[ok] - truth[ok]) ** 2))))
     return min(errors, default=math.inf)

@@ -89,10 +89,12 @@ class TableSpec(Strict):
                                                         "candidate maps are compared by image error; 0: by "
                                                         "cross-validation of the grid's parameters alone.")
     seed: int = Field(0, ge=0, le=2**31 - 1, description="Seed of the held-out draw.")
-    continuation: bool = Field(True, description="Refit each grid point once more, from one start: what a smooth "
-                                                 "map of the other points' fits gives there; the refit replaces the "
-                                                 "first where it is as good (fits that landed in different optima "
-                                                 "become one family a map can follow).")
+    continuation: bool = Field(False, description="Refit each grid point once more, from one start: what a smooth "
+                                                  "map of the other points' fits gives there; the refit replaces the "
+                                                  "first where it is as good (fits that landed in different optima "
+                                                  "become one family a map can follow). Twice the fits; off by "
+                                                  "default: on the shipped tables it did not bring lookups closer "
+                                                  "to direct fits (docs/tables.md).")
     scene: SceneSpec = SceneSpec()
     options: Settings = Field(default_factory=Settings, description="How every fit runs (as `remap`'s flags).")
 

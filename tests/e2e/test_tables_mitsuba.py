@@ -19,6 +19,7 @@ SPEC = {
              "specular_reflectance": {"range": [0.3, 1.0], "steps": 3}},
     "target": {"adapter": "mitsuba", "model": "ward", "fix": {"diffuse_reflectance": 0}},
     "holdout": 3,
+    "continuation": True,
     "scene": {"resolution": 48},
     "options": {"validation": "none"},
 }
@@ -51,6 +52,10 @@ def test_build_resume_and_look_up(tmp_path, mitsuba_adapter, capsys):
     assert by[(0.05, 1.0)]["specular_reflectance"][0] > by[(0.05, 0.3)]["specular_reflectance"][0]
     assert by[(0.4, 0.65)]["alpha"] > by[(0.05, 0.65)]["alpha"]
     assert (out / "points.csv").read_text().count("\n") == 16
+    # Each point refitted from its neighbours' map, kept where as good; the refits stored beside the points.
+    assert all((out / "points" / p.id / "continued" / "result.json").exists() for p in table.points)
+    kept = [p for p in table.points if p.continued]
+    assert kept and all(p.error <= 1.02 * p.first_error + 0.5 * p.noise_floor for p in kept)
 
     # Again: every fit and check is reused, and the table is the same.
     assert main(["table", "build", str(spec), "--out", str(out), "--quiet"]) == 0
@@ -95,7 +100,8 @@ def test_a_table_built_on_a_dask_cluster_is_the_same(tmp_path, mitsuba_adapter):
     from distributed import LocalCluster
 
     small = {**SPEC, "axes": {"alpha": {"range": [0.1, 0.3], "steps": 2},
-                              "specular_reflectance": {"range": [0.5, 1.0], "steps": 2}}, "holdout": 0}
+                              "specular_reflectance": {"range": [0.5, 1.0], "steps": 2}}, "holdout": 0,
+             "continuation": False}
     spec = _write(tmp_path / "spec.yaml", small)
     assert main(["table", "build", str(spec), "--out", str(tmp_path / "here"), "--quiet"]) == 0
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
