@@ -88,17 +88,12 @@ def accuracy(args) -> None:
 def speed(args) -> None:
     from brdfremap.core.tables import TableMap, read_table
     from brdfremap.core.tables.dense import DenseMap
-    from brdfremap.core.tables.texels import read_inputs, remap_texels
-    from brdfremap.core.schemas import Material
-    from brdfremap.core.plugins import collect_adapters
-    from brdfremap.core.textures import Texture, encode, kind_of_file, texture
 
     t0 = time.perf_counter()
     table = read_table(args.tables[0])
     tmap = TableMap(table)
     loaded = time.perf_counter() - t0
-    layout, spec = table.layout, table.spec
-    drawn = layout.draw(256, 7)
+    drawn = table.layout.draw(256, 7)
     tmap.params(drawn[0])  # warm
     t0 = time.perf_counter()
     reps = 0
@@ -113,7 +108,17 @@ def speed(args) -> None:
     t0 = time.perf_counter()
     DenseMap(tmap)
     print(f"bake         {(time.perf_counter() - t0) * 1e3:.0f} ms (the map on a fine grid, once per texture set)")
-    n = args.size
+    texture_set(table, tmap, args.size)
+
+
+def texture_set(table, tmap, n: int) -> None:
+    """A texture set of n² texels per input, written as files, read, remapped and its maps encoded."""
+    from brdfremap.core.plugins import collect_adapters
+    from brdfremap.core.schemas import Material
+    from brdfremap.core.tables.texels import read_inputs, remap_texels
+    from brdfremap.core.textures import Texture, encode, kind_of_file, texture
+
+    spec = table.spec
     src_spec = collect_adapters().get(spec.source.adapter).models[spec.source.model]
     rng = np.random.default_rng(3)
     with tempfile.TemporaryDirectory() as tmp:

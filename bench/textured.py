@@ -33,61 +33,89 @@ def main() -> None:
 
     from brdfremap.core.execute import adapter_pool
     from brdfremap.core.executors import workers
-    from brdfremap.core.job import Job, resolve
     from brdfremap.core.plugins import collect_adapters
-    from brdfremap.core.runner import Runner, Task
-    from brdfremap.core.schemas import Material
-    from brdfremap.core.store import Store
     from brdfremap.core.tables import TableMap, read_table
-    from brdfremap.core.tables.lookup import look_up
-    from brdfremap.core.tables.texels import Inputs, remap_texels
 
     t0 = time.perf_counter()
     table = read_table(args.table)
     tmap = TableMap(table)
-    spec, n = table.spec, args.size
     registry = collect_adapters()
-    src_spec = registry.get(spec.source.adapter).models[spec.source.model]
-    tgt_spec = registry.get(spec.target.adapter).models[spec.target.model]
+    n = args.size
     drawn = table.layout.draw(n * n, args.seed)
-    scene = table.scene
+    with workers(args.jobs) as w, adapter_pool(registry) as adapters:
+        fits, looked = _fit_each_texel(table, tmap, registry, w, drawn, args.out)
+        src_maps = _source_maps(table, drawn, n)
+        table_maps, fitted_maps, seconds = _target_maps(table, tmap, registry, src_maps, fits, n)
+        rows = _render_and_compare(table, adapters, registry, src_maps, table_maps, fitted_maps)
+    _print(table, tmap, n, rows, fits, looked, seconds, time.perf_counter() - t0)
+
+
+def _fit_each_texel(table, tmap, registry, w, drawn, out):
+    """Each texel's uniform material fitted directly, and looked up (ordinary jobs, resumable)."""
+    from brdfremap.core.job import Job, resolve
+    from brdfremap.core.runner import Runner, Task
+    from brdfremap.core.schemas import Material
+    from brdfremap.core.store import Store
+    from brdfremap.core.tables.lookup import look_up
+
+    spec = table.spec
     settings = spec.options.model_copy(update={"validation": "none"})
     tasks, lookups = [], []
     for i, values in enumerate(drawn):
         src = Material(adapter=spec.source.adapter, model=spec.source.model, params={**spec.source.params, **values},
                        name=f"t{i:03d}")
-        job = resolve(Job(source=src, target=spec.target, scene=scene, settings=settings), registry).job
+        job = resolve(Job(source=src, target=spec.target, scene=table.scene, settings=settings), registry).job
         tasks.append(Task(f"texels/t{i:03d}", job, f"texel {i}"))
         lk = look_up(table, tmap, values).lookup
         lookups.append(Task(f"lookups/t{i:03d}", resolve(job.model_copy(update={"lookup": lk}), registry).job,
                             f"lookup {i}"))
-    with workers(args.jobs) as w, adapter_pool(registry) as adapters:
-        done = Runner(Store(args.out), w, quiet=True, stop_on_error=False).run(tasks + lookups)
-        fits, looked = done[:n * n], done[n * n:]
-        # The source's maps, texel by texel (row-major: texel i at row i // n, column i % n).
-        src_maps = {}
-        for name in spec.axes:
-            v = np.array([d[name] for d in drawn], np.float32)
-            src_maps[name] = v.reshape(n, n, 3) if v.ndim == 2 else v.reshape(n, n)
-        inputs = Inputs({k: v.reshape(n * n, -1).squeeze() for k, v in src_maps.items()}, n, n, list(spec.axes))
-        through = remap_texels(table, tmap, inputs)
-        table_maps = {**through.maps, **{k: _full(v, n, tgt_spec.param(k).kind) for k, v in through.constants.items()}}
-        fitted_maps = {}
-        for name in table_maps:
-            vals = np.array([f.report.params.get(name, table.target_params[name]) for f in fits], np.float32)
-            fitted_maps[name] = vals.reshape(n, n, 3) if vals.ndim == 2 else vals.reshape(n, n)
-        base = {**table.target_params}
-        texturable = [k for k in table_maps if k in tgt_spec.texturable]
-        rows = []
-        for condition, sc in _conditions(scene):
-            src_img, src_noise = _pair(adapters[spec.source.adapter], spec.source.model,
-                                       {**table.source_params, **_means(src_maps)}, src_maps, sc, 0)
-            for label, maps in (("through the table", table_maps), ("each texel fitted", fitted_maps)):
-                tgt_img, tgt_noise = _pair(adapters[spec.target.adapter], spec.target.model, base,
-                                           {k: maps[k] for k in texturable}, sc, 2)
-                from brdfremap.core.metrics import relative_rmse
+    done = Runner(Store(out), w, quiet=True, stop_on_error=False).run(tasks + lookups)
+    return done[:len(drawn)], done[len(drawn):]
 
-                rows.append((condition, label, relative_rmse(src_img, tgt_img), float(np.hypot(src_noise, tgt_noise))))
+
+def _source_maps(table, drawn, n):
+    """The source's maps (texel i at row i // n, column i % n)."""
+    out = {}
+    for name in table.spec.axes:
+        v = np.array([d[name] for d in drawn], np.float32)
+        out[name] = v.reshape(n, n, 3) if v.ndim == 2 else v.reshape(n, n)
+    return out
+
+
+def _target_maps(table, tmap, registry, src_maps, fits, n):
+    """The target's maps through the table, and of the per-texel fits."""
+    from brdfremap.core.tables.texels import Inputs, remap_texels
+
+    tgt_spec = registry.get(table.spec.target.adapter).models[table.spec.target.model]
+    inputs = Inputs({k: v.reshape(n * n, -1).squeeze() for k, v in src_maps.items()}, n, n, list(table.spec.axes))
+    through = remap_texels(table, tmap, inputs)
+    table_maps = {**through.maps, **{k: _full(v, n, tgt_spec.param(k).kind) for k, v in through.constants.items()}}
+    fitted_maps = {}
+    for name in table_maps:
+        vals = np.array([f.report.params.get(name, table.target_params[name]) for f in fits], np.float32)
+        fitted_maps[name] = vals.reshape(n, n, 3) if vals.ndim == 2 else vals.reshape(n, n)
+    return table_maps, fitted_maps, through.seconds
+
+
+def _render_and_compare(table, adapters, registry, src_maps, table_maps, fitted_maps):
+    """Both target texture sets and the source's, each by its renderer, under the check's conditions."""
+    from brdfremap.core.metrics import relative_rmse
+
+    spec = table.spec
+    tgt_spec = registry.get(spec.target.adapter).models[spec.target.model]
+    texturable = [k for k in table_maps if k in tgt_spec.texturable]
+    rows = []
+    for condition, sc in _conditions(table.scene):
+        src_img, src_noise = _pair(adapters[spec.source.adapter], spec.source.model,
+                                   {**table.source_params, **_means(src_maps)}, src_maps, sc, 0)
+        for label, maps in (("through the table", table_maps), ("each texel fitted", fitted_maps)):
+            tgt_img, tgt_noise = _pair(adapters[spec.target.adapter], spec.target.model, dict(table.target_params),
+                                       {k: maps[k] for k in texturable}, sc, 2)
+            rows.append((condition, label, relative_rmse(src_img, tgt_img), float(np.hypot(src_noise, tgt_noise))))
+    return rows
+
+
+def _print(table, tmap, n, rows, fits, looked, seconds, wall) -> None:
     fit_err = np.array([f.report.metrics.relative_rmse for f in fits])
     look_err = np.array([d.report.metrics.relative_rmse for d in looked])
     print(f"table          {table.name} ({tmap.method} map)")
@@ -100,8 +128,8 @@ def main() -> None:
           f"{np.median(look_err):.2%}; lookup / fit median {np.median(ratio):.3f}, 95th percentile "
           f"{np.percentile(ratio, 95):.3f}")
     print(f"cost           {sum(f.report.renders for f in fits)} target renders for the {n * n} fits "
-          f"({sum(f.report.seconds for f in fits):.0f} s of fits), the table's remap {through.seconds * 1e3:.1f} ms; "
-          f"{time.perf_counter() - t0:.0f} s in all")
+          f"({sum(f.report.seconds for f in fits):.0f} s of fits), the table's remap {seconds * 1e3:.1f} ms; "
+          f"{wall:.0f} s in all")
 
 
 def _full(v, n: int, kind: str) -> np.ndarray:

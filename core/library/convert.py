@@ -278,8 +278,11 @@ def _line(done: Done, i: int, n: int) -> str:
     if done.report is None:
         return f"[{i}/{n}] {done.task.title}: FAILED: {done.error}"
     r = done.report
-    return (f"[{i}/{n}] {done.task.title} -> {r.target.model}: {r.metrics.relative_rmse:.2%}, {r.renders} renders, "
-            f"{r.seconds:.1f} s, {r.verdict}" + (" [resumed]" if done.resumed else "")
+    how = "" if r.job.lookup is None else " through a table" + (
+        f", texel by texel ({r.textures.width} x {r.textures.height}; textured check "
+        + ", ".join(f"{c.condition} {c.error:.1%}" for c in r.textures.checks) + ")" if r.textures else "")
+    return (f"[{i}/{n}] {done.task.title} -> {r.target.model}{how}: {r.metrics.relative_rmse:.2%}, {r.renders} "
+            f"renders, {r.seconds:.1f} s, {r.verdict}" + (" [resumed]" if done.resumed else "")
             + (f" (redone: {done.redone})" if done.redone else ""))
 
 

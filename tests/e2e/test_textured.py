@@ -8,7 +8,6 @@ import subprocess
 import sys
 
 import numpy as np
-import pytest
 import yaml
 
 from brdfremap.core.cli import main
