@@ -26,13 +26,15 @@ def adapters_parser() -> argparse.ArgumentParser:
     return p
 
 
-def _parameter(p) -> str:
-    """One parameter as `remap adapters` shows it: name, kind, bounds or choices, default."""
+def _parameter(p, spec=None) -> str:
+    """One parameter as `remap adapters` shows it: name, kind, bounds or choices, default, and
+    whether its renderer takes it as an image (a texture)."""
     if p.kind == "choice":
         return f"{p.name} ({' | '.join(map(str, p.choices))}; default {p.default})"
     scale = ", log" if p.scale == "log" else ""
     held = (", held unless the source has it" if p.fit_when_carried else ", held") if not p.fit else ""
-    return f"{p.name} ({p.kind} [{p.lower:g}, {p.upper:g}]{scale}{held}; default {format_value(p.default)})"
+    image = ", an image too" if spec is not None and p.name in spec.texturable else ""
+    return f"{p.name} ({p.kind} [{p.lower:g}, {p.upper:g}]{scale}{held}{image}; default {format_value(p.default)})"
 
 
 def adapters(args: argparse.Namespace) -> int:
@@ -58,7 +60,7 @@ def adapters(args: argparse.Namespace) -> int:
             lobes = "each lobe renders alone" if spec.has_lobes else "no lobe isolation"
             print(f"  model {mname} ({lobes}):")
             for p in spec.parameters:
-                print(f"    {_parameter(p)}")
+                print(f"    {_parameter(p, spec)}")
     for plugin, err in sorted(registry.broken.items() if not args.adapter else ()):
         print(f"broken plugin {plugin}: {err}")
     return 0
