@@ -1,6 +1,7 @@
 # Two commands do all the set-up on a fresh Debian machine:
-#   make demo   - the main job: an example Mitsuba scene of eight materials converted to Blender
-#                 Cycles (out/library: library.blend, index.html)
+#   make demo   - the main job: an example Mitsuba scene of ten materials, two of them textured,
+#                 converted to Blender Cycles (out/library: library.blend, index.html); the textured
+#                 ones texel by texel through the remap tables shipped in configs/tables/built/
 #   make test   - the test suite
 # Both create .venv and install what they need; `system-deps` adds libLLVM 19 so Mitsuba
 # can use its fast llvm_ad_rgb variant (without it the tool falls back to scalar_rgb), and
@@ -30,8 +31,12 @@ system-deps:
 	  $$SUDO apt-get update -qq && $$SUDO apt-get install -y -qq $(APT_NEEDS) >/dev/null; \
 	fi
 
+TABLES := configs/tables/built
+
 demo: system-deps $(STAMP)
-	$(VENV)/bin/remap convert examples/library/scene.xml --to cycles --out out/library
+	$(VENV)/bin/remap convert examples/library/scene.xml --to cycles --out out/library \
+	  --table $(TABLES)/mitsuba-roughconductor-to-cycles-principled.json \
+	  --table $(TABLES)/mitsuba-roughplastic-to-cycles-principled.json
 
 test: system-deps $(STAMP)
 	$(PY) -m pytest

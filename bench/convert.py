@@ -2,7 +2,7 @@
 
     python bench/convert.py [--to cycles] [--reps 1] [--out docs/convert.txt] [--screenshot docs/report.png]
 
-Converts the example scene (examples/library/scene.xml, eight materials) into fresh folders, so
+Converts the example scene (examples/library/scene.xml, ten materials) into fresh folders, so
 every material is fitted (nothing reused), in one process and then in two worker processes, each
 a whole `remap convert` as a user runs it (interpreter, renderers' start-up included). Prints
 seconds, materials per minute and the ratio, and checks that both give the same fits. With

@@ -142,7 +142,7 @@ def test_killed_and_rerun_every_material_once_and_dask_gives_the_same(tmp_path, 
     rerun = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     assert rerun.returncode == 0, rerun.stderr
     lines = [line for line in rerun.stderr.splitlines() if line.startswith("[")]
-    assert sum("[resumed]" in line for line in lines) == stored and len(lines) == 8
+    assert sum("[resumed]" in line for line in lines) == stored and len(lines) == 10
     assert not [p for p in (out / "materials").rglob(".staging-*")]
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
         assert main(["convert", str(src), "--to", "mitsuba", "--out", str(tmp_path / "dask"), "--resolution", "64",
