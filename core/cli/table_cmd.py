@@ -68,8 +68,11 @@ def _summary(t) -> None:
     print(f"table          {t.name}: {s.source.adapter}:{s.source.model} -> {s.target.adapter}:{s.target.model}")
     print(f"grid           {axes} = {b.points} points; mapped: "
           f"{', '.join(dict.fromkeys(o.param for o in t.outputs if o.kind != 'error'))}")
+    cliffs = sum(1 for pt in t.points if pt.left_out.startswith("a cliff"))
+    continued = sum(pt.continued for pt in t.points)
     print(f"fits           {b.used} used, {b.flagged} flagged unreliable, {b.left_out} left out of the regression "
-          "(their fit itself in question)")
+          f"({b.left_out - cliffs} whose fit is in question, {cliffs} cliffs)"
+          + (f"; {continued} continued from their neighbours" if t.spec.continuation else ""))
     print(f"cost           {b.renders} target renders, {b.seconds:.0f} s of fits; this build {b.wall_seconds:.1f} s "
           f"in {b.ran_in}")
     print("maps           held-out lookup error / direct fit error; cross-validated error on the grid (a fraction "

@@ -270,12 +270,13 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
         chosen, why = choose(candidates)
         table = draft.model_copy(update={"candidates": candidates, "chosen": chosen, "chosen_why": why})
         renders, seconds = checks_account(folder, table)
+        final = table.points  # after continuation and the cliffs
         table = table.model_copy(update={"build": BuildRecord(
-            points=len(points), used=sum(pt.used for pt in points),
-            flagged=sum(pt.verdict in ("unreliable", "failed") for pt in points),
-            left_out=sum(not pt.used for pt in points), holdout=len(held),
-            renders=sum(pt.renders for pt in points + held) + renders,
-            seconds=sum(pt.seconds for pt in points + held) + seconds,
+            points=len(final), used=sum(pt.used for pt in final),
+            flagged=sum(pt.verdict in ("unreliable", "failed") for pt in final),
+            left_out=sum(not pt.used for pt in final), holdout=len(held),
+            renders=sum(pt.renders for pt in points + held) + renders + _continued(folder, final)[0],
+            seconds=sum(pt.seconds for pt in points + held) + seconds + _continued(folder, final)[1],
             wall_seconds=time.perf_counter() - t0, ran_in=workers.where)})
         write_table(folder / "table.json", table)
         write_points_csv(folder / "points.csv", table)
@@ -295,6 +296,20 @@ def _draft(p: Plan, file: str, spec: TableSpec, points, held, names, first, scen
                  points=points, holdout=held, candidates={}, chosen="", chosen_why="",
                  build=BuildRecord(points=0, used=0, flagged=0, left_out=0, holdout=0, renders=0, seconds=0,
                                    wall_seconds=0, ran_in=""))
+
+
+def _continued(folder: Path, points: list[PointRecord]) -> tuple[int, float]:
+    """Target renders and seconds of the continuation refits stored (kept or not)."""
+    from ..report import read_report
+
+    renders, seconds = 0, 0.0
+    for pt in points:
+        try:
+            r = read_report(folder / "points" / pt.id / "continued" / "result.json")
+        except ConfigError:
+            continue
+        renders, seconds = renders + r.renders, seconds + r.seconds
+    return renders, seconds
 
 
 def checks_account(folder: Path, table: Table) -> tuple[int, float]:
