@@ -12,7 +12,7 @@ The probe sphere's texture coordinates, which every adapter that renders texture
 u = φ / 2π and v = θ / π of the sphere's own frame (its pole along the image's up, +y; θ = 0 at
 the top pole; φ = 0 towards the image's right, +x, increasing away from the viewer, so the half the
 camera sees is u from 0.5 to 1), and an image's top row at v = 0, its left column at u = 0.
-`tests/adapters/test_textures.py` checks each adapter against another with a checker of colours."""
+`tests/adapters/test_adapter_textures.py` checks each adapter against another with a checker of colours."""
 
 from __future__ import annotations
 
