@@ -4,6 +4,7 @@ rebuild would be caught here), reads whole, and answers lookups inside its targe
 import numpy as np
 import pytest
 
+from brdfremap.core.appearance import reflectivity_edge_tint
 from brdfremap.core.plugins import collect_adapters
 from brdfremap.core.tables import TableMap, load_table_spec, read_table
 from brdfremap.core.tables.dense import DenseMap
@@ -26,7 +27,23 @@ def test_each_spec_has_its_built_table_and_it_answers_inside_the_bounds(spec):
         target.complete(params)  # every value within its bounds (a ConfigError otherwise)
         assert 0 < expected < 10
     many = DenseMap(tmap).predict({k: [v[k] for v in drawn] for k in table.spec.axes})
-    for name, v in many.items():
-        exact = [tmap.params(values)[0][name] for values in drawn]
-        assert np.abs(v - np.array(exact, np.float32)).max() < 1e-3 * (
-            target.param(name).upper - target.param(name).lower), name  # the baked map is the map
+    exact = {name: np.array([tmap.params(values)[0][name] for values in drawn], np.float32) for name in many}
+    for name, (baked, truth) in _as_mapped(table, many, exact, target).items():
+        assert np.abs(baked - truth).max() < 1e-3, name  # the baked map is the map, to 0.1 % of the range
+
+
+def _as_mapped(table, many, exact, target) -> dict:
+    """Each parameter as the map predicts it, over its range: a conductor's eta and k as their
+    reflectivity and edge tint (near a reflectivity of 1, a tiny change in edge tint is a large one in k)."""
+    via = next((o.via for o in table.outputs if o.via), ())
+    out = {}
+    for name in many:
+        if name in via:
+            continue
+        p = target.param(name)
+        out[name] = (many[name] / (p.upper - p.lower), exact[name] / (p.upper - p.lower))
+    if via:
+        for part, baked, truth in zip(("reflectivity", "edge tint"), reflectivity_edge_tint(*(many[n] for n in via)),
+                                      reflectivity_edge_tint(*(exact[n] for n in via))):
+            out[part] = (np.asarray(baked), np.asarray(truth))
+    return out
