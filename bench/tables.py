@@ -42,7 +42,7 @@ def accuracy(args) -> None:
     from brdfremap.core.tables.lookup import look_up
 
     registry = collect_adapters()
-    rows = []
+    rows, tails = [], []
     with workers(args.jobs) as w, adapter_pool(registry):
         for path in args.tables:
             t0 = time.perf_counter()
@@ -76,6 +76,7 @@ def accuracy(args) -> None:
                          float(np.percentile(ratio[ok], 95)), float(np.max(ratio[ok])), float(np.mean(ratio[ok] <= 1.05)),
                          float(np.nanmedian(analytic)), float(np.median(d_err[ok])), float(np.median(l_err[ok])),
                          time.perf_counter() - t0))
+            tails.append((table.name, _worst(drawn, d_err, l_err)))
     print(f"{'table':<62} {'map':<11} {'n':>3} {'median':>7} {'p95':>6} {'max':>6} {'<=1.05':>7} {'analytic':>8} "
           f"{'direct':>7} {'lookup':>7} {'s':>6}")
     for name, method, n, med, p95, worst, frac, ana, d, lk, secs in rows:
@@ -83,6 +84,21 @@ def accuracy(args) -> None:
               f"{d:>7.2%} {lk:>7.2%} {secs:>6.0f}")
     print("median, p95, max: lookup error / direct fit error over the drawn materials; <=1.05: the share within 5 %; "
           "analytic: the exporters' conversion's error / the direct fit's, median; direct, lookup: median relative RMSE")
+    for name, lines in tails:
+        print(f"worst of {name}:")
+        for line in lines:
+            print(f"  {line}")
+
+
+def _worst(drawn: list[dict], d_err: np.ndarray, l_err: np.ndarray, k: int = 3) -> list[str]:
+    """The k materials whose lookups are furthest from their direct fits (ratio), with both errors."""
+    ratio = np.where(np.isfinite(l_err / d_err), l_err / d_err, -np.inf)
+    lines = []
+    for i in np.argsort(-ratio)[:k]:
+        shown = ", ".join(f"{n} {np.round(np.mean(v), 3) if np.ndim(v) else round(float(v), 3)}"
+                          for n, v in drawn[i].items())
+        lines.append(f"r{i:03d} ({shown}): lookup {l_err[i]:.2%} / direct {d_err[i]:.2%} = {ratio[i]:.2f}")
+    return lines
 
 
 def speed(args) -> None:
