@@ -41,13 +41,27 @@ def main() -> None:
     tmap = TableMap(table)
     registry = collect_adapters()
     n = args.size
-    drawn = table.layout.draw(n * n, args.seed)
+    drawn, held = _drawn(table, registry, n * n, args.seed)
     with workers(args.jobs) as w, adapter_pool(registry) as adapters:
         fits, looked = _fit_each_texel(table, tmap, registry, w, drawn, args.out)
         src_maps = _source_maps(table, drawn, n)
         table_maps, fitted_maps, seconds = _target_maps(table, tmap, registry, src_maps, fits, n)
         rows = _render_and_compare(table, adapters, registry, src_maps, table_maps, fitted_maps)
+    if held:
+        print(f"held         {', '.join(f'{k} {v:.3g}' for k, v in held.items())} in every texel "
+              f"(the source renderer's {table.spec.source.model} takes them as numbers only)")
     _print(table, tmap, n, rows, fits, looked, seconds, time.perf_counter() - t0)
+
+
+def _drawn(table, registry, count: int, seed: int) -> tuple[list[dict], dict]:
+    """The texels' source values; an axis the source renderer takes as a number only is held at its
+    first drawn value in every texel."""
+    drawn = table.layout.draw(count, seed)
+    texturable = registry.get(table.spec.source.adapter).models[table.spec.source.model].texturable
+    held = {k: drawn[0][k] for k in table.spec.axes if k not in texturable}
+    if len(held) == len(table.spec.axes):
+        sys.exit(f"{table.name}: the source model takes none of the axes ({', '.join(held)}) as an image")
+    return [{**d, **held} for d in drawn], held
 
 
 def _fit_each_texel(table, tmap, registry, w, drawn, out):
@@ -76,7 +90,7 @@ def _fit_each_texel(table, tmap, registry, w, drawn, out):
 def _source_maps(table, drawn, n):
     """The source's maps (texel i at row i // n, column i % n)."""
     out = {}
-    for name in table.spec.axes:
+    for name in table.spec.axes:  # a held axis is a constant map (the table's remap reads it so)
         v = np.array([d[name] for d in drawn], np.float32)
         out[name] = v.reshape(n, n, 3) if v.ndim == 2 else v.reshape(n, n)
     return out
@@ -103,13 +117,16 @@ def _render_and_compare(table, adapters, registry, src_maps, table_maps, fitted_
 
     spec = table.spec
     tgt_spec = registry.get(spec.target.adapter).models[spec.target.model]
+    src_spec = registry.get(spec.source.adapter).models[spec.source.model]
     texturable = [k for k in table_maps if k in tgt_spec.texturable]
     rows = []
     for condition, sc in _conditions(table.scene):
         src_img, src_noise = _pair(adapters[spec.source.adapter], spec.source.model,
-                                   {**table.source_params, **_means(src_maps)}, src_maps, sc, 0)
+                                   {**table.source_params, **_means(src_maps)},
+                                   {k: v for k, v in src_maps.items() if k in src_spec.texturable}, sc, 0)
         for label, maps in (("through the table", table_maps), ("each texel fitted", fitted_maps)):
-            tgt_img, tgt_noise = _pair(adapters[spec.target.adapter], spec.target.model, dict(table.target_params),
+            tgt_img, tgt_noise = _pair(adapters[spec.target.adapter], spec.target.model,
+                                       {**table.target_params, **_means(maps)},  # a number-only input: its mean
                                        {k: maps[k] for k in texturable}, sc, 2)
             rows.append((condition, label, relative_rmse(src_img, tgt_img), float(np.hypot(src_noise, tgt_noise))))
     return rows
