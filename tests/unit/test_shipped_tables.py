@@ -47,3 +47,16 @@ def _as_mapped(table, many, exact, target) -> dict:
                                       reflectivity_edge_tint(*(exact[n] for n in via))):
             out[part] = (np.asarray(baked), np.asarray(truth))
     return out
+
+
+def test_a_texture_set_looked_up_block_by_block_is_looked_up_whole(monkeypatch):
+    from brdfremap.core.tables import dense
+
+    table = read_table(ROOT / "configs" / "tables" / "built" / "cycles-principled-to-mitsuba-principled.json")
+    drawn = table.layout.draw(50, 3)
+    values = {k: np.array([v[k] for v in drawn], np.float32) for k in table.spec.axes}
+    baked = DenseMap(TableMap(table))
+    whole = baked.predict(values)
+    monkeypatch.setattr(dense, "BLOCK", 7)  # 50 = 7 blocks of 7 and one of 1
+    for name, v in baked.predict(values).items():
+        assert v.shape == whole[name].shape and np.array_equal(v, whole[name]), name
