@@ -20,12 +20,13 @@ from ..execute import IMAGES, AdapterPool
 from ..executors import Workers
 from ..job import Job, Target, Where, resolve
 from ..plugins import AdapterRegistry
+from ..report import read_report
 from ..runner import Done, Runner, Task
 from ..scene import ProbeScene
 from ..settings import Settings
-from ..report import read_report
 from ..store import RESULT, Store, owned
 from ..tables import Table, TableMap
+from ..tables.lookup import Answer
 from ..textures import Texture
 from .formats import Converted, Entry, Formats
 
@@ -37,7 +38,7 @@ class Destination:
     """None: the adapter chooses per material (`Adapter.model_for`)."""
 
     @classmethod
-    def parse(cls, text: str, registry: AdapterRegistry) -> "Destination":
+    def parse(cls, text: str, registry: AdapterRegistry) -> Destination:
         adapter, _, model = text.partition(":")
         adapter = registry.resolve(adapter, field_name="--to")  # a name, or a renderer definition file
         entry = registry.get(adapter, field_name="--to")
@@ -123,22 +124,57 @@ def plan(entries: list[Entry], dest: Destination, registry: AdapterRegistry, ada
 
 def _through_table(item: Item, dest: Destination, registry: AdapterRegistry, scene: ProbeScene, settings: Settings,
                    tables: list[TableUse]) -> bool:
-    """A textured material's job through the first table that maps it to the destination: a lookup
-    at its textures' mean, remapped texel by texel. False (the textures' constants are used, and
-    the material's notes say why) when no table does."""
+    """A textured material's job through the table that maps it to the destination with the least
+    error its direct fits reach at the textures' mean (as a fit keeps the model that fits best): a
+    lookup there, remapped texel by texel. False (the textures' constants are used, and the
+    material's notes say why) when no table does."""
+    e, src = item.entry, item.entry.material
+    answers, why = _table_answers(e, src, dest, registry, tables)
+    if not answers:
+        inputs = ", ".join(sorted(src.textures))
+        item.entry = e.model_copy(update={
+            "notes": [*e.notes, f"textured inputs ({inputs}) converted with their constant values: {why}"],
+            "material": src.model_copy(update={"textures": {}})})
+        return False
+    use, answer = min(answers, key=lambda ua: (ua[1].lookup.expected_error is None, ua[1].lookup.expected_error or 0.0))
+    t = use.table
+    mean = src.model_copy(update={"params": {**src.params, **answer.values}})
+    job = Job(source=mean, target=t.spec.target, scene=scene, settings=settings, label=f"{e.file}: {e.name}",
+              lookup=answer.lookup.model_copy(update={"file": use.file}))
+    where = Where(source_file=e.file, params_prefix=f"{e.name}: params", target_file=use.file,
+                  target_prefix="target.", fix_prefix="target.fix")
+    item.model = t.spec.target.model
+    item.why = f"textured: remapped texel by texel through the table {t.name!r}"
+    if len(answers) > 1:
+        others = ", ".join(f"{u.table.spec.target.model} {_pct(a.lookup.expected_error)}" for u, a in answers
+                           if u is not use)
+        item.why += (f" (its fits reach {_pct(answer.lookup.expected_error)} at the textures' mean; "
+                     f"the other tables': {others})")
+    item.task = Task(item.slot, resolve(job, registry, where).job, e.name)
+    return True
+
+
+def _pct(error: float | None) -> str:
+    return "an unknown error" if error is None else f"{error:.1%}"
+
+
+def _table_answers(e: Entry, src, dest: Destination, registry: AdapterRegistry,
+                   tables: list[TableUse]) -> tuple[list[tuple[TableUse, Answer]], str]:
+    """Each given table that maps this textured material to the destination, with its lookup at the
+    textures' mean; and, when none does, why (the last table's reason)."""
     from ..tables.lookup import axis_values, look_up
     from ..tables.texels import mean_values, read_inputs
 
-    e, src = item.entry, item.entry.material
     spec = registry.get(src.adapter).models[src.model]
-    why = [f"no --table maps {src.adapter}:{src.model} to {dest.adapter}"]
+    why = f"no --table maps {src.adapter}:{src.model} to {dest.adapter}"
+    answers = []
     for use in tables:
         t = use.table
         if (t.spec.source.adapter, t.spec.source.model, t.spec.target.adapter) != (src.adapter, src.model,
                                                                                    dest.adapter):
             continue
         if dest.model is not None and dest.model != t.spec.target.model:
-            why = [f"the table {t.name!r} maps to {t.spec.target.model}, not {dest.model}"]
+            why = f"the table {t.name!r} maps to {t.spec.target.model}, not {dest.model}"
             continue
         try:
             axis_values(t, src, spec, e.file, prefix=f"{e.name}: params")
@@ -146,24 +182,11 @@ def _through_table(item: Item, dest: Destination, registry: AdapterRegistry, sce
             if loose:
                 raise ConfigError(f"its axes are {', '.join(t.spec.axes)}, and {', '.join(loose)} is an image")
         except ConfigError as exc:
-            why = [f"the table {t.name!r} does not map it: {exc}"]
+            why = f"the table {t.name!r} does not map it: {exc}"
             continue
         values = mean_values(read_inputs(t, src, spec, e.file))  # a broken image fails the material, said
-        answer = look_up(t, use.tmap, values)
-        mean = src.model_copy(update={"params": {**src.params, **values}})
-        job = Job(source=mean, target=t.spec.target, scene=scene, settings=settings, label=f"{e.file}: {e.name}",
-                  lookup=answer.lookup.model_copy(update={"file": use.file}))
-        where = Where(source_file=e.file, params_prefix=f"{e.name}: params", target_file=use.file,
-                      target_prefix="target.", fix_prefix="target.fix")
-        item.model = t.spec.target.model
-        item.why = f"textured: remapped texel by texel through the table {t.name!r}"
-        item.task = Task(item.slot, resolve(job, registry, where).job, e.name)
-        return True
-    inputs = ", ".join(sorted(src.textures))
-    item.entry = e.model_copy(update={
-        "notes": [*e.notes, f"textured inputs ({inputs}) converted with their constant values: {why[0]}"],
-        "material": src.model_copy(update={"textures": {}})})
-    return False
+        answers.append((use, look_up(t, use.tmap, values)))
+    return answers, why
 
 
 def _prepare(item: Item, dest: Destination, registry: AdapterRegistry, adapters: AdapterPool, scene: ProbeScene,

@@ -106,4 +106,4 @@ def _decode(output, t: np.ndarray) -> np.ndarray:
     return output.from_unit(t, np.float32)
 
 
-__all__ = ["DenseMap", "ERROR"]
+__all__ = ["ERROR", "DenseMap"]

@@ -9,11 +9,11 @@ import sys
 
 import numpy as np
 import yaml
-
 from brdfremap.core.cli import main
 from brdfremap.core.imageio import read_image
 from brdfremap.core.metrics import relative_rmse
 from brdfremap.core.scene import EnvironmentLight, ProbeScene
+from brdfremap.core.tables.build import fit_candidates
 from brdfremap.core.tables.table import write_table
 from helpers import ROOT, one_line_error, remap
 from reports import read_result
@@ -211,3 +211,32 @@ MTLX = """<?xml version="1.0"?>
   </surfacematerial>
 </materialx>
 """
+
+
+def test_convert_takes_the_table_whose_direct_fits_come_closest(tmp_path):
+    """Two tables map the textured metal to Cycles: convert keeps the one whose fits reach the least
+    error at the textures' mean (as a fit keeps the model that fits best), and says so; the order
+    the tables were given in does not matter."""
+    from brdfremap.core.library.convert import (
+        Destination,
+        Item,
+        TableUse,
+        _through_table,
+    )
+    from brdfremap.core.library.formats import collect_formats, read_all
+    from brdfremap.core.plugins import collect_adapters
+    from brdfremap.core.settings import Settings
+    from brdfremap.core.tables import TableMap
+
+    registry = collect_adapters()
+    loose = principled_table(tmp_path)  # its fits: 10 %
+    close = loose.model_copy(update={"name": "closer", "points": [
+        p.model_copy(update={"error": 0.02}) for p in loose.points]})
+    close = close.model_copy(update={"candidates": fit_candidates(close)})
+    uses = [TableUse(f"{t.name}.json", t, TableMap(t)) for t in (loose, close)]
+    entry = next(e for e in read_all([DATA / "scene.xml"], collect_formats()) if e.name == "worn metal")
+    for order in (uses, uses[::-1]):
+        item = Item(entry, "worn-metal")
+        assert _through_table(item, Destination.parse("cycles", registry), registry, ProbeScene(), Settings(), order)
+        assert item.task.job.lookup.table == "closer"
+        assert "its fits reach 2.0%" in item.why and "principled 10.0%" in item.why
