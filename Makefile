@@ -36,6 +36,7 @@ TABLES := configs/tables/built
 demo: system-deps $(STAMP)
 	$(VENV)/bin/remap convert examples/library/scene.xml --to cycles --out out/library \
 	  --table $(TABLES)/mitsuba-roughconductor-to-cycles-principled.json \
+	  --table $(TABLES)/mitsuba-roughconductor-to-cycles-metallic.json \
 	  --table $(TABLES)/mitsuba-roughplastic-to-cycles-principled.json
 
 test: system-deps $(STAMP)
