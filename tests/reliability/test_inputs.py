@@ -160,7 +160,7 @@ def test_a_scene_that_would_render_black_is_refused_naming_the_field(tmp_path, s
 
 
 @pytest.mark.parametrize("args, words", [
-    (["rendr", str(GOLD), "--out", "x.exr"], "unknown command 'rendr' (commands: convert, render"),
+    (["rendr", str(GOLD), "--out", "x.exr"], "unknown command 'rendr' (commands: convert, table, render"),
     (["render", "RESULT", "--out", "x.exr"], "is a result (result.json) file, where a material was expected"),
     (["--adapter", "cycles", "--model", "principled", "--source", str(GOLD), "--out", "o", "--fix",
       "coat_roughness=0.1"], "--fix coat_roughness: does nothing with coat_weight=0"),
