@@ -48,7 +48,7 @@ def main() -> None:
         table_maps, fitted_maps, seconds = _target_maps(table, tmap, registry, src_maps, fits, n)
         rows = _render_and_compare(table, adapters, registry, src_maps, table_maps, fitted_maps)
     if held:
-        print(f"held         {', '.join(f'{k} {v:.3g}' for k, v in held.items())} in every texel "
+        print(f"held         {', '.join(f'{k} {np.round(v, 3).tolist()}' for k, v in held.items())} in every texel "
               f"(the source renderer's {table.spec.source.model} takes them as numbers only)")
     _print(table, tmap, n, rows, fits, looked, seconds, time.perf_counter() - t0)
 

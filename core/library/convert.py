@@ -125,9 +125,9 @@ def plan(entries: list[Entry], dest: Destination, registry: AdapterRegistry, ada
 def _through_table(item: Item, dest: Destination, registry: AdapterRegistry, scene: ProbeScene, settings: Settings,
                    tables: list[TableUse]) -> bool:
     """A textured material's job through the table that maps it to the destination with the least
-    error its direct fits reach at the textures' mean (as a fit keeps the model that fits best): a
-    lookup there, remapped texel by texel. False (the textures' constants are used, and the
-    material's notes say why) when no table does."""
+    error its direct fits reach at the textures' mean, under the probe light (held-out lights are
+    judged in the result's verdict, not here): a lookup there, remapped texel by texel. False (the
+    textures' constants are used, and the material's notes say why) when no table does."""
     e, src = item.entry, item.entry.material
     answers, why = _table_answers(e, src, dest, registry, tables)
     if not answers:
@@ -146,10 +146,10 @@ def _through_table(item: Item, dest: Destination, registry: AdapterRegistry, sce
     item.model = t.spec.target.model
     item.why = f"textured: remapped texel by texel through the table {t.name!r}"
     if len(answers) > 1:
-        others = ", ".join(f"{u.table.spec.target.model} {_pct(a.lookup.expected_error)}" for u, a in answers
-                           if u is not use)
-        item.why += (f" (its fits reach {_pct(answer.lookup.expected_error)} at the textures' mean; "
-                     f"the other tables': {others})")
+        others = ", ".join(f"{u.table.name!r} ({u.table.spec.target.model}) {_pct(a.lookup.expected_error)}"
+                           for u, a in answers if u is not use)
+        item.why += (f" (its fits reach {_pct(answer.lookup.expected_error)} at the textures' mean, under the "
+                     f"probe light; the other tables': {others})")
     item.task = Task(item.slot, resolve(job, registry, where).job, e.name)
     return True
 

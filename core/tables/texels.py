@@ -1,5 +1,5 @@
 """A textured source through a table, texel by texel: its images read to linear values on a common
-resolution, every texel looked up at once (the map baked on a fine grid), and the target's maps."""
+resolution, every texel looked up through the map baked on a fine grid (in blocks), and the target's maps."""
 
 from __future__ import annotations
 

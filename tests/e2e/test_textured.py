@@ -238,5 +238,6 @@ def test_convert_takes_the_table_whose_direct_fits_come_closest(tmp_path):
     for order in (uses, uses[::-1]):
         item = Item(entry, "worn-metal")
         assert _through_table(item, Destination.parse("cycles", registry), registry, ProbeScene(), Settings(), order)
-        assert item.task.job.lookup.table == "closer"
-        assert "its fits reach 2.0%" in item.why and "principled 10.0%" in item.why
+        assert item.task.job.lookup.table == "closer" and item.model == "principled"
+        assert "'closer'" in item.why and "its fits reach 2.0%" in item.why
+        assert "'synthetic principled' (principled) 10.0%" in item.why
