@@ -74,14 +74,18 @@ def test_a_textured_metal_converts_through_a_table_to_mitsuba_and_the_library_re
 
     xml = (out / "library.xml").read_text()
     assert '<string name="filename" value="textures/' in xml
-    mi.file_resolver().prepend(str(out))
+    resolver = mi.file_resolver()
+    kept = [str(resolver[i]) for i in range(len(resolver))]  # Mitsuba's own folders (its plugins among them)
+    resolver.prepend(str(out))
     try:
         scene_doc = mitsuba_adapter.scene_dict("principled", mitsuba_adapter.models["principled"].complete({}),
                                                _studio(64, 128))
         scene_doc["probe"]["bsdf"] = mi.load_string(_bsdf_of(xml, "worn metal"))
         img = np.array(mi.render(mi.load_dict(scene_doc), seed=7, spp=128))[..., :3]
-    finally:
-        mi.file_resolver().clear()
+    finally:  # as it was: clear() alone would leave later renders without Mitsuba's plugins
+        resolver.clear()
+        for folder in kept:
+            resolver.append(folder)
     ref = read_image(out / "materials" / row["slot"] / "target-textured.exr")
     assert relative_rmse(ref, img) < 3 * max(t["checks"][1]["noise_floor"], 0.01)
     plain = _textured(out, "plain gold")[1]
