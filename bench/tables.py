@@ -92,7 +92,8 @@ def accuracy(args) -> None:
 
 def _worst(drawn: list[dict], d_err: np.ndarray, l_err: np.ndarray, k: int = 3) -> list[str]:
     """The k materials whose lookups are furthest from their direct fits (ratio), with both errors."""
-    ratio = np.where(np.isfinite(l_err / d_err), l_err / d_err, -np.inf)
+    ratio = l_err / d_err
+    ratio = np.where(np.isfinite(ratio), ratio, -np.inf)
     lines = []
     for i in np.argsort(-ratio)[:k]:
         shown = ", ".join(f"{n} {np.round(np.mean(v), 3) if np.ndim(v) else round(float(v), 3)}"

@@ -168,6 +168,7 @@ def _table_answers(e: Entry, src, dest: Destination, registry: AdapterRegistry,
     spec = registry.get(src.adapter).models[src.model]
     why = f"no --table maps {src.adapter}:{src.model} to {dest.adapter}"
     answers = []
+    means: dict[tuple[str, ...], dict] = {}  # the images read once for tables of the same axes
     for use in tables:
         t = use.table
         if (t.spec.source.adapter, t.spec.source.model, t.spec.target.adapter) != (src.adapter, src.model,
@@ -184,8 +185,10 @@ def _table_answers(e: Entry, src, dest: Destination, registry: AdapterRegistry,
         except ConfigError as exc:
             why = f"the table {t.name!r} does not map it: {exc}"
             continue
-        values = mean_values(read_inputs(t, src, spec, e.file))  # a broken image fails the material, said
-        answers.append((use, look_up(t, use.tmap, values)))
+        axes = tuple(t.spec.axes)
+        if axes not in means:  # a broken image fails the material, said
+            means[axes] = mean_values(read_inputs(t, src, spec, e.file))
+        answers.append((use, look_up(t, use.tmap, means[axes])))
     return answers, why
 
 

@@ -271,12 +271,13 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
         table = draft.model_copy(update={"candidates": candidates, "chosen": chosen, "chosen_why": why})
         renders, seconds = checks_account(folder, table)
         final = table.points  # after continuation and the cliffs
+        refit_renders, refit_seconds = _continued(folder, final)
         table = table.model_copy(update={"build": BuildRecord(
             points=len(final), used=sum(pt.used for pt in final),
             flagged=sum(pt.verdict in ("unreliable", "failed") for pt in final),
             left_out=sum(not pt.used for pt in final), holdout=len(held),
-            renders=sum(pt.renders for pt in points + held) + renders + _continued(folder, final)[0],
-            seconds=sum(pt.seconds for pt in points + held) + seconds + _continued(folder, final)[1],
+            renders=sum(pt.renders for pt in points + held) + renders + refit_renders,
+            seconds=sum(pt.seconds for pt in points + held) + seconds + refit_seconds,
             wall_seconds=time.perf_counter() - t0, ran_in=workers.where)})
         write_table(folder / "table.json", table)
         write_points_csv(folder / "points.csv", table)

@@ -156,7 +156,7 @@ def test_a_lookup_checks_the_material_against_the_table(tmp_path):
     values = axis_values(table, good, spec, "m.yaml")
     assert values == {"alpha": 0.1, "specular_reflectance": [0.5, 0.6, 0.7]}
     answer = look_up(table, TableMap(table), values)
-    assert answer.lookup.digest == table.digest and answer.seconds < 0.05
+    assert answer.lookup.digest == table.digest  # its time: bench/tables.py speed
     for params, field in (({**good.params, "distribution": "ggx"}, "params.distribution"),
                           ({**good.params, "material": "Au"}, "params.material"),
                           ({**good.params, "eta": 0.2}, "params.eta")):
