@@ -77,10 +77,10 @@ def accuracy(args) -> None:
                          float(np.nanmedian(analytic)), float(np.median(d_err[ok])), float(np.median(l_err[ok])),
                          time.perf_counter() - t0))
             tails.append((table.name, _worst(drawn, d_err, l_err)))
-    print(f"{'table':<62} {'map':<11} {'n':>3} {'median':>7} {'p95':>6} {'max':>6} {'<=1.05':>7} {'analytic':>8} "
+    print(f"{'table':<62} {'map':<16} {'n':>3} {'median':>7} {'p95':>6} {'max':>6} {'<=1.05':>7} {'analytic':>8} "
           f"{'direct':>7} {'lookup':>7} {'s':>6}")
     for name, method, n, med, p95, worst, frac, ana, d, lk, secs in rows:
-        print(f"{name:<62} {method:<11} {n:>3} {med:>7.3f} {p95:>6.3f} {worst:>6.3f} {frac:>7.0%} {ana:>8.3f} "
+        print(f"{name:<62} {method:<16} {n:>3} {med:>7.3f} {p95:>6.3f} {worst:>6.3f} {frac:>7.0%} {ana:>8.3f} "
               f"{d:>7.2%} {lk:>7.2%} {secs:>6.0f}")
     print("median, p95, max: lookup error / direct fit error over the drawn materials; <=1.05: the share within 5 %; "
           "analytic: the exporters' conversion's error / the direct fit's, median; direct, lookup: median relative RMSE")

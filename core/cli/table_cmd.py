@@ -70,8 +70,10 @@ def _summary(t) -> None:
           f"{', '.join(dict.fromkeys(o.param for o in t.outputs if o.kind != 'error'))}")
     cliffs = sum(1 for pt in t.points if pt.left_out.startswith("a cliff"))
     continued = sum(pt.continued for pt in t.points)
+    remedied = sum(bool(pt.remedy) for pt in t.points)
     print(f"fits           {b.used} used, {b.flagged} flagged unreliable, {b.left_out} left out of the regression "
           f"({b.left_out - cliffs} whose fit is in question, {cliffs} cliffs)"
+          + (f"; {remedied} refitted as their findings advised" if remedied else "")
           + (f"; {continued} continued from their neighbours" if t.spec.continuation else ""))
     print(f"cost           {b.renders} target renders, {b.seconds:.0f} s of fits; this build {b.wall_seconds:.1f} s "
           f"in {b.ran_in}")

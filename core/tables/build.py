@@ -36,6 +36,10 @@ QUESTIONED = frozenset({"not_at_minimum", "cannot_resolve", "image_precision", "
 """Findings that put the fit itself in question (it may not be the best this target does): such a
 point is left out of the regression. A mismatch, a held-out light over the threshold, a bound the
 fit presses on, parameters that trade off: the fit is still the closest the target gets, and kept."""
+REMEDIES: dict[str, dict] = {"not_at_minimum": {"scheme": "three"}}
+"""The refit a grid point's finding names as its remedy (the fit's own advice to a user: a fit that
+stopped short of a minimum of the full image is fitted again by scheme three, every parameter on
+the full image). The refit replaces the first fit where it ends lower."""
 PREFERENCE = ("polynomial", "rbf", "multilinear")
 """Order among maps that do equally well: the smoothest first."""
 
@@ -137,6 +141,38 @@ def _mapped(p: Plan, points: list[PointRecord], done: list[Done]) -> list[str]:
     return [n for n in p.target_spec.names if n in fitted]
 
 
+def remedy_points(p: Plan, registry: AdapterRegistry, runner: Runner, scene, points: list[PointRecord]
+                  ) -> list[PointRecord]:
+    """Each grid point whose fit is in question for a reason with a remedy (`REMEDIES`) fitted again
+    with it, stored as `points/<id>/remedy/`; the refit's record replaces the first where its error
+    is lower (and says so), whatever its own findings say (they decide whether the map uses it)."""
+    tasks, which = [], []
+    for i, pt in enumerate(points):
+        update = _remedy(pt, p.spec.options)
+        if update:
+            tasks.append(_task(p, registry, f"points/{pt.id}/remedy", pt.values, f"{pt.id} remedy "
+                               + " ".join(f"{k}={v}" for k, v in update.items()), scene,
+                               p.spec.options.model_copy(update=update)))
+            which.append(i)
+    out = list(points)
+    for i, d in zip(which, runner.run(tasks)):
+        first = points[i]
+        if d.report is not None and first.error is not None and d.report.metrics.relative_rmse < first.error:
+            out[i] = record(first.id, first.values, d, tuple(first.index)).model_copy(update={
+                "remedy": ", ".join(f"{k} {v}" for k, v in _remedy(first, p.spec.options).items()),
+                "first_error": first.error})
+    return out
+
+
+def _remedy(pt: PointRecord, options) -> dict:
+    """The settings the first remedy among the point's findings changes (none already in effect)."""
+    for kind in pt.findings:
+        update = {k: v for k, v in REMEDIES.get(kind, {}).items() if getattr(options, k) != v}
+        if update and not pt.used:
+            return update
+    return {}
+
+
 CONTINUE_SLACK, CONTINUE_NOISE, CONTINUE_SMOOTHING = 1.02, 0.5, 1e-3
 """A refit from the neighbours' map replaces a point's first fit when its error is at most this much
 of the first's, plus this much of the render noise (at the noise, two fits are alike); the
@@ -231,7 +267,14 @@ def fit_candidates(draft: Table) -> dict[str, Candidate]:
             out[method] = Candidate(method=method, problem=str(exc).splitlines()[0], hyper={}, cv_rms={})
             continue
         out[method] = Candidate(method=method, hyper=hyper, cv_rms=cv)
+        if _shares_channels(draft):  # the same map, the colour read at its mean grey level
+            out[f"{method}-mean"] = out[method].model_copy(update={"channels": "mean"})
     return out
+
+
+def _shares_channels(draft: Table) -> bool:
+    """Whether some output is shared by the channels of a grey `scale` axis (a scalar target parameter)."""
+    return bool(draft.layout.grey_axes) and any(not o.per_channel for o in draft.outputs)
 
 
 def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRegistry, workers: Workers, *,
@@ -248,7 +291,8 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
                         stop_on_error=False, line=_line)
         done = runner.run(grid_tasks + held_tasks)
         grid_done, held_done = done[:len(grid_tasks)], done[len(grid_tasks):]
-        points = [record(t.slot.split("/")[1], v, d, idx) for t, (idx, v), d in zip(grid_tasks, p.grid, grid_done)]
+        firsts = [record(t.slot.split("/")[1], v, d, idx) for t, (idx, v), d in zip(grid_tasks, p.grid, grid_done)]
+        points = remedy_points(p, registry, runner, scene, firsts)
         need = len(p.layout.dims) + 2
         if sum(pt.used for pt in points) < need:
             write_points_csv(folder / "points.csv", _draft(p, file, spec, points, [], [], None, scene))
@@ -271,13 +315,13 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
         table = draft.model_copy(update={"candidates": candidates, "chosen": chosen, "chosen_why": why})
         renders, seconds = checks_account(folder, table)
         final = table.points  # after continuation and the cliffs
-        refit_renders, refit_seconds = _continued(folder, final)
+        refit_renders, refit_seconds = _refits(folder, final)
         table = table.model_copy(update={"build": BuildRecord(
             points=len(final), used=sum(pt.used for pt in final),
             flagged=sum(pt.verdict in ("unreliable", "failed") for pt in final),
             left_out=sum(not pt.used for pt in final), holdout=len(held),
-            renders=sum(pt.renders for pt in points + held) + renders + refit_renders,
-            seconds=sum(pt.seconds for pt in points + held) + seconds + refit_seconds,
+            renders=sum(pt.renders for pt in firsts + held) + renders + refit_renders,
+            seconds=sum(pt.seconds for pt in firsts + held) + seconds + refit_seconds,
             wall_seconds=time.perf_counter() - t0, ran_in=workers.where)})
         write_table(folder / "table.json", table)
         write_points_csv(folder / "points.csv", table)
@@ -299,17 +343,18 @@ def _draft(p: Plan, file: str, spec: TableSpec, points, held, names, first, scen
                                    wall_seconds=0, ran_in=""))
 
 
-def _continued(folder: Path, points: list[PointRecord]) -> tuple[int, float]:
-    """Target renders and seconds of the continuation refits stored (kept or not)."""
+def _refits(folder: Path, points: list[PointRecord]) -> tuple[int, float]:
+    """Target renders and seconds of the refits stored (remedies and continuation, kept or not)."""
     from ..report import read_report
 
     renders, seconds = 0, 0.0
     for pt in points:
-        try:
-            r = read_report(folder / "points" / pt.id / "continued" / "result.json")
-        except ConfigError:
-            continue
-        renders, seconds = renders + r.renders, seconds + r.seconds
+        for refit in ("remedy", "continued"):
+            try:
+                r = read_report(folder / "points" / pt.id / refit / "result.json")
+            except ConfigError:
+                continue
+            renders, seconds = renders + r.renders, seconds + r.seconds
     return renders, seconds
 
 
@@ -364,13 +409,21 @@ def _check_holdout(p: Plan, registry: AdapterRegistry, runner: Runner, draft: Ta
     return out
 
 
+MEDIAN_TIE = 0.01
+"""Maps whose held-out median ratios are within this fraction of the best one's are told apart by
+their 95th percentile (a 0.1 % better median is not worth a tail twice as far off)."""
+
+
 def choose(candidates: dict[str, Candidate]) -> tuple[str, str]:
     """The map whose lookups of the held-out materials come closest to their direct fits (median
-    ratio, then the 95th percentile); without held-out materials, the least cross-validated error."""
+    ratio, within `MEDIAN_TIE`; then the 95th percentile); without held-out materials, the least
+    cross-validated error."""
     judged = {m: c for m, c in candidates.items() if c.median_ratio is not None and not c.problem}
     if judged:
-        best = min(judged, key=lambda m: (round(judged[m].median_ratio, 3), round(judged[m].p95_ratio, 3),
-                                          PREFERENCE.index(m)))
+        lowest = min(c.median_ratio for c in judged.values())
+        close = [m for m, c in judged.items() if c.median_ratio <= lowest * (1 + MEDIAN_TIE)]
+        best = min(close, key=lambda m: (round(judged[m].p95_ratio, 3), judged[m].median_ratio,
+                                         _preference(judged[m])))
         c = judged[best]
         return best, (f"lookups of {sum(r is not None for r in c.ratios)} held-out materials: median "
                       f"{c.median_ratio:.3f}, 95th percentile {c.p95_ratio:.3f} of the direct fit's error")
@@ -379,8 +432,13 @@ def choose(candidates: dict[str, Candidate]) -> tuple[str, str]:
         vals = [v for k, v in candidates[m].cv_rms.items() if k != "error" and v is not None]
         return float(np.mean(vals)) if vals and not candidates[m].problem else math.inf
 
-    best = min(candidates, key=lambda m: (round(cv(m), 4), PREFERENCE.index(m)))
+    best = min(candidates, key=lambda m: (round(cv(m), 4), _preference(candidates[m])))
     return best, f"no held-out materials: least cross-validated error on the grid ({cv(best):.4f} of the range)"
+
+
+def _preference(c: Candidate) -> tuple[int, int]:
+    """Among maps that do equally well: the smoother kind, then the colour read channel by channel."""
+    return PREFERENCE.index(c.method), c.channels != "weighted"
 
 
 def write_points_csv(path: Path, table: Table) -> Path:
@@ -393,7 +451,7 @@ def write_points_csv(path: Path, table: Table) -> Path:
             row.update({f"target.{o.param}": _cell((pt.params or {}).get(o.param)) for o in table.outputs
                         if o.kind != "error"})
             row.update({"error": _cell(pt.error), "noise_floor": _cell(pt.noise_floor), "verdict": pt.verdict,
-                        "used": pt.used, "left_out": pt.left_out, "reason": pt.reason})
+                        "used": pt.used, "left_out": pt.left_out, "reason": pt.reason, "refit": pt.remedy})
             rows.append(row)
     cols: list[str] = []
     for r in rows:

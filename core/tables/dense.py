@@ -86,6 +86,7 @@ class DenseMap:
                 cells[channel] = _Cells(layout.columns(values, channel, np.float32), self.shape)
             return cells[channel]
 
+        weights = layout.channel_weights(values, np.float32) if self.tmap.weighted else None
         out: dict[str, np.ndarray] = {}
         chans: dict[str, list] = {}
         for o in self.table.outputs:
@@ -94,10 +95,15 @@ class DenseMap:
             lut = self.luts[o.label]
             if o.per_channel:
                 out[o.param] = np.stack([_decode(o, at(c).interpolate(lut)) for c in range(3)], axis=-1)
-            elif o.channel is not None:
-                chans.setdefault(o.param, [None] * 3)[o.channel] = _decode(o, at(None).interpolate(lut))
+                continue
+            if weights is None:
+                shared = _decode(o, at(None).interpolate(lut))
+            else:  # as TableMap.predict: each channel's lookup, weighted
+                shared = sum(weights[:, c] * _decode(o, at(c).interpolate(lut)) for c in range(3))
+            if o.channel is not None:
+                chans.setdefault(o.param, [None] * 3)[o.channel] = shared
             else:
-                out[o.param] = _decode(o, at(None).interpolate(lut))
+                out[o.param] = shared
         out.update({k: np.stack(v, axis=-1) for k, v in chans.items()})
         return finish(self.table.outputs, out)
 

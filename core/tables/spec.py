@@ -187,6 +187,27 @@ class Layout:
             out.append(values)
         return out
 
+    @property
+    def grey_axes(self) -> list[str]:
+        """The RGB axes sampled as grey levels (`mode: scale`)."""
+        return [n for n, a in self.axes.items() if self.kinds[n] == "rgb" and a.mode == "scale"]
+
+    def channel_weights(self, values: dict[str, np.ndarray], dtype=np.float64) -> np.ndarray | None:
+        """N x 3: how much each channel counts in an output the channels share (a scalar target
+        parameter), which is looked up at each channel's grey level and averaged with these weights.
+        A channel's weight is its share of the squared value of the `scale` RGB axes: a fit minimises
+        the squared pixel error, to which a channel's image counts as its brightness squared (so the
+        bright channels decide, as they do in a direct fit). None without such an axis; equal
+        weights for black."""
+        names = self.grey_axes
+        if not names:
+            return None
+        w = np.ones(np.shape(values[names[0]]), dtype)
+        for n in names:
+            w *= np.square(np.clip(np.asarray(values[n], dtype), 0.0, None))
+        total = w.sum(axis=-1, keepdims=True)
+        return np.where(total > 0, w / np.where(total > 0, total, 1.0), dtype(1.0 / 3.0)).astype(dtype)
+
     def features(self, values: dict[str, np.ndarray], channel: int | None) -> np.ndarray:
         """The map's input for source values (each an array: N for a scalar axis, N x 3 for an RGB
         one), as N x dims coordinates in the unit cube. ``channel`` picks the channel of `scale`

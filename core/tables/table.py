@@ -8,7 +8,7 @@ from __future__ import annotations
 import hashlib
 import json
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from pydantic import Field, ValidationError, computed_field
@@ -21,7 +21,9 @@ from .maps import Grid, Regressor, build
 from .outputs import ERROR, Output, finish, target_value
 from .spec import Layout, TableSpec
 
-TABLE_SCHEMA_VERSION = 1
+TABLE_SCHEMA_VERSION = 2
+"""2: an output the channels share is looked up at each channel's grey level and weighted (was: at the
+mean grey level); a table of 1 is built again into its folder, which reuses its fits."""
 
 
 class PointRecord(Strict):
@@ -42,13 +44,19 @@ class PointRecord(Strict):
     seconds: float = 0.0
     key: str = ""
     continued: bool = Field(False, description="The refit from its neighbours' map replaced the first fit.")
-    first_error: float | None = Field(None, description="The first fit's relative RMSE, where the refit replaced it.")
+    remedy: str = Field("", description="The settings of the refit its first fit's finding named as the remedy, "
+                                        "where that refit replaced the first fit ('': none did).")
+    first_error: float | None = Field(None, description="The first fit's relative RMSE, where a refit replaced it.")
 
 
 class Candidate(Strict):
     """One kind of map, fitted to the used grid points, and how it did."""
 
     method: str
+    channels: Literal["weighted", "mean"] = Field(
+        "weighted", description="How an output the channels share (a scalar target parameter under a grey `scale` "
+                                "axis) reads the source's colour: looked up at each channel's grey level and weighted "
+                                "by the channel's value squared, or looked up at the mean grey level.")
     problem: str = Field("", description="Why this map cannot be fitted to the grid's used points ('': it can).")
     hyper: dict[str, float | int | None] = Field(description="Per output: the hyperparameter cross-validation chose "
                                                              "(polynomial degree, RBF smoothing).")
@@ -97,7 +105,7 @@ class Table(WithDerived):
     points: list[PointRecord]
     holdout: list[PointRecord]
     candidates: dict[str, Candidate]
-    chosen: str = Field(description="The method of the map lookups use.")
+    chosen: str = Field(description="The candidate map lookups use (a key of candidates).")
     chosen_why: str
     build: BuildRecord
 
@@ -134,9 +142,11 @@ class TableMap:
     """A table's map, ready for lookups: target parameters for source axis values."""
 
     def __init__(self, table: Table, method: str | None = None):
+        """``method``: a key of the table's candidates (its chosen map by default)."""
         self.table, self.method = table, method or table.chosen
-        hyper = table.candidates[self.method].hyper
-        self.regressors: dict[str, Regressor] = {o.label: build(self.method, grid_of(table, o), hyper.get(o.label))
+        c = table.candidates[self.method]
+        self.weighted = c.channels == "weighted"
+        self.regressors: dict[str, Regressor] = {o.label: build(c.method, grid_of(table, o), c.hyper.get(o.label))
                                                  for o in table.outputs}
 
     def predict(self, values: dict[str, Any]) -> dict[str, np.ndarray]:
@@ -152,17 +162,24 @@ class TableMap:
                 features[channel] = layout.features(arr, channel)
             return features[channel]
 
+        weights = layout.channel_weights(arr) if self.weighted else None
+
+        def each_channel(o: Output) -> np.ndarray:  # N x 3: the three channels' coordinates in one call
+            return o.from_unit(self.regressors[o.label].predict(np.concatenate([at(c) for c in range(3)]))
+                               ).reshape(3, -1).T
+
         out: dict[str, np.ndarray] = {}
         chans: dict[str, list] = {}
         for o in self.table.outputs:
-            f = self.regressors[o.label].predict
-            if o.per_channel:  # the three channels' coordinates in one call
-                both = o.from_unit(f(np.concatenate([at(c) for c in range(3)])))
-                out[o.param] = both.reshape(3, -1).T
-            elif o.channel is not None:
-                chans.setdefault(o.param, [None] * 3)[o.channel] = o.from_unit(f(at(None)))
+            if o.per_channel:
+                out[o.param] = each_channel(o)
+                continue
+            shared = (o.from_unit(self.regressors[o.label].predict(at(None))) if weights is None
+                      else np.sum(each_channel(o) * weights, axis=-1))
+            if o.channel is not None:
+                chans.setdefault(o.param, [None] * 3)[o.channel] = shared
             else:
-                out[o.param] = o.from_unit(f(at(None)))
+                out[o.param] = shared
         out.update({k: np.stack(v, axis=-1) for k, v in chans.items()})
         return finish(self.table.outputs, out)
 
@@ -222,7 +239,8 @@ def read_table(path: str | Path) -> Table:
     if doc["schema_version"] != TABLE_SCHEMA_VERSION:
         newer = doc["schema_version"] > TABLE_SCHEMA_VERSION
         raise ConfigError(f"table format {doc['schema_version']}; this brdf-remap reads {TABLE_SCHEMA_VERSION}: "
-                          + ("upgrade brdf-remap" if newer else "build the table again"), file=str(p))
+                          + ("upgrade brdf-remap" if newer else "build it again with `remap table build` into its "
+                                                                "folder (its stored fits are reused)"), file=str(p))
     try:
         table = Table.model_validate(doc)
     except ValidationError as exc:

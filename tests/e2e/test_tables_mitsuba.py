@@ -40,7 +40,10 @@ def test_build_resume_and_look_up(tmp_path, mitsuba_adapter, capsys):
     assert "12 points" in printed and "chosen" in printed
     table = read_table(out)
     assert len(table.points) == 12 and len(table.holdout) == 3
-    assert set(table.candidates) == {"multilinear", "polynomial", "rbf"}
+    # Each kind of map, with alpha (shared by the channels) read channel by channel and at the mean grey level.
+    assert set(table.candidates) == {"multilinear", "polynomial", "rbf", "multilinear-mean", "polynomial-mean",
+                                     "rbf-mean"}
+    assert {c.channels for c in table.candidates.values()} == {"weighted", "mean"}
     assert all(c.median_ratio is not None and len(c.holdout_errors) == 3 for c in table.candidates.values())
     assert table.chosen in table.candidates and [o.label for o in table.outputs] == [
         "specular_reflectance", "alpha", "error"]

@@ -126,6 +126,44 @@ def test_the_map_applies_per_channel_and_leaves_out_what_it_must(tmp_path):
     assert outside(table, {"alpha": 0.2, "specular_reflectance": [0.5, 0.5, 0.5]}) == []
 
 
+def test_an_output_the_channels_share_weighs_each_channel_by_its_brightness(tmp_path):
+    """A scalar target parameter under a grey `scale` axis: looked up at each channel's grey level
+    and averaged with the channels' squared values as weights (the bright channels decide, as in a
+    direct fit), by a single lookup and texel by texel alike; black weighs the channels equally."""
+    from brdfremap.core.tables.build import fit_candidates
+    from brdfremap.core.tables.dense import DenseMap
+
+    table = synthetic_table(tmp_path)
+    points = [pt.model_copy(update={"used": True, "params": {
+        **pt.params, "alpha": pt.values["alpha"] * (1 + pt.values["specular_reflectance"][0])}}) for pt in table.points]
+    table = table.model_copy(update={"points": points})
+    tmap = TableMap(table.model_copy(update={"candidates": fit_candidates(table)}), "multilinear")
+    colours = np.array([[0.3, 0.65, 1.0], [1.0, 0.3, 0.3], [0.0, 0.0, 0.0]])  # grid levels: multilinear is exact
+    got = tmap.predict({"alpha": np.full(3, 0.05), "specular_reflectance": colours})["alpha"]
+    each = 0.05 * (1 + np.where(colours > 0, colours, 0.3))  # black is clamped to the axis's lowest level
+    weights = np.array([c ** 2 / (c ** 2).sum() if c.any() else np.full(3, 1 / 3) for c in colours])
+    assert got == pytest.approx((each * weights).sum(axis=1), rel=1e-6)
+    assert got[0] > 0.05 * (1 + colours[0].mean())  # not the mean grey level's
+    dense = DenseMap(tmap).predict({"alpha": np.full(3, 0.05, np.float32),
+                                    "specular_reflectance": colours.astype(np.float32)})["alpha"]
+    assert dense == pytest.approx(got, rel=1e-5)
+
+
+def test_only_a_fit_in_question_with_a_remedy_is_refitted_and_only_with_what_it_changes():
+    from brdfremap.core.settings import Settings
+    from brdfremap.core.tables.build import _remedy
+    from brdfremap.core.tables.table import PointRecord
+
+    def point(findings, used=False):
+        return PointRecord(id="g0", values={}, params={}, error=0.05, verdict="unreliable", findings=findings,
+                           used=used)
+
+    assert _remedy(point(["held_out_above", "not_at_minimum"]), Settings()) == {"scheme": "three"}
+    assert _remedy(point(["not_at_minimum"]), Settings(scheme="three")) == {}  # already in effect
+    assert _remedy(point(["cannot_resolve"]), Settings()) == {}  # no remedy to take
+    assert _remedy(point(["held_out_above"], used=True), Settings()) == {}  # not in question: kept as it is
+
+
 def test_a_table_file_is_versioned_and_an_edited_one_refused(tmp_path):
     table = synthetic_table(tmp_path)
     path = write_table(tmp_path / "table.json", table)
@@ -139,6 +177,10 @@ def test_a_table_file_is_versioned_and_an_edited_one_refused(tmp_path):
     doc["schema_version"] = TABLE_SCHEMA_VERSION + 1
     path.write_text(json.dumps(doc))
     with pytest.raises(ConfigError, match="upgrade brdf-remap"):
+        read_table(path)
+    doc["schema_version"] = TABLE_SCHEMA_VERSION - 1  # its map read otherwise: built again, its fits reused
+    path.write_text(json.dumps(doc))
+    with pytest.raises(ConfigError, match=r"build it again .*\(its stored fits are reused\)"):
         read_table(path)
     path.write_text(json.dumps({"schema_version": 3, "key": "x"}))
     with pytest.raises(ConfigError, match="not a remap table"):
@@ -174,6 +216,9 @@ def test_choice_prefers_the_lookups_closest_to_direct_fits():
                                  p95_ratio=1.1, ratios=[1.0]),
          "rbf": Candidate(method="rbf", hyper={}, cv_rms={"a": 0.02}, median_ratio=1.2, p95_ratio=1.2, ratios=[1.0])}
     assert choose(c)[0] == "polynomial"
+    # Medians within 1 % of the best are alike: the shorter tail decides.
+    close = {**c, "rbf": c["rbf"].model_copy(update={"median_ratio": 1.015, "p95_ratio": 1.05})}
+    assert choose(close)[0] == "rbf"
     blind = {m: x.model_copy(update={"median_ratio": None, "p95_ratio": None}) for m, x in c.items()}
     assert choose(blind)[0] == "multilinear"
 
