@@ -81,13 +81,13 @@ def _summary(t) -> None:
           "of each parameter's range)")
     for m, c in t.candidates.items():
         if c.problem:
-            print(f"    {m:<12} cannot be fitted here: {c.problem}")
+            print(f"    {m:<16} cannot be fitted here: {c.problem}")
             continue
         held = (f"median {c.median_ratio:.3f}, 95th percentile {c.p95_ratio:.3f}" if c.median_ratio is not None
                 else "no held-out lookups")
         cv = ", ".join(f"{k} " + ("–" if v is None else f"{v:.3f}") for k, v in c.cv_rms.items() if k != "error")
         mark = "*" if m == t.chosen else " "
-        print(f"  {mark} {m:<12} {held}; {cv}")
+        print(f"  {mark} {m:<16} {held}; {cv}")
     print(f"chosen         {t.chosen}: {t.chosen_why}")
 
 

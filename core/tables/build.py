@@ -201,7 +201,7 @@ def continue_points(p: Plan, registry: AdapterRegistry, runner: Runner, draft: T
         if again is not None and first.error is not None and again.metrics.relative_rmse <= (
                 CONTINUE_SLACK * first.error + CONTINUE_NOISE * (first.noise_floor or 0.0)):
             points[i] = record(first.id, first.values, d, tuple(first.index)).model_copy(update={
-                "continued": True, "first_error": first.error})
+                "continued": True, "first_error": first.first_error or first.error, "remedy": first.remedy})
     return points
 
 
@@ -274,7 +274,8 @@ def fit_candidates(draft: Table) -> dict[str, Candidate]:
 
 def _shares_channels(draft: Table) -> bool:
     """Whether some output is shared by the channels of a grey `scale` axis (a scalar target parameter)."""
-    return bool(draft.layout.grey_axes) and any(not o.per_channel for o in draft.outputs)
+    return bool(draft.layout.grey_axes) and any(
+        o.kind != "error" and not o.per_channel and o.channel is None for o in draft.outputs)
 
 
 def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRegistry, workers: Workers, *,

@@ -96,14 +96,12 @@ class DenseMap:
             if o.per_channel:
                 out[o.param] = np.stack([_decode(o, at(c).interpolate(lut)) for c in range(3)], axis=-1)
                 continue
-            if weights is None:
-                shared = _decode(o, at(None).interpolate(lut))
-            else:  # as TableMap.predict: each channel's lookup, weighted
-                shared = sum(weights[:, c] * _decode(o, at(c).interpolate(lut)) for c in range(3))
-            if o.channel is not None:
-                chans.setdefault(o.param, [None] * 3)[o.channel] = shared
+            if o.channel is not None:  # as TableMap.predict
+                chans.setdefault(o.param, [None] * 3)[o.channel] = _decode(o, at(None).interpolate(lut))
+            elif weights is None:
+                out[o.param] = _decode(o, at(None).interpolate(lut))
             else:
-                out[o.param] = shared
+                out[o.param] = sum(weights[:, c] * _decode(o, at(c).interpolate(lut)) for c in range(3))
         out.update({k: np.stack(v, axis=-1) for k, v in chans.items()})
         return finish(self.table.outputs, out)
 

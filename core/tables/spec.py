@@ -195,18 +195,16 @@ class Layout:
     def channel_weights(self, values: dict[str, np.ndarray], dtype=np.float64) -> np.ndarray | None:
         """N x 3: how much each channel counts in an output the channels share (a scalar target
         parameter), which is looked up at each channel's grey level and averaged with these weights.
-        A channel's weight is its share of the squared value of the `scale` RGB axes: a fit minimises
-        the squared pixel error, to which a channel's image counts as its brightness squared (so the
-        bright channels decide, as they do in a direct fit). None without such an axis; equal
-        weights for black."""
+        A channel's weight is its share of the squared values of the `scale` RGB axes (summed over
+        them): a fit minimises the squared pixel error, to which a channel's image counts as its
+        brightness squared (so the bright channels decide, as they do in a direct fit). None without
+        such an axis; equal weights for black."""
         names = self.grey_axes
         if not names:
             return None
-        w = np.ones(np.shape(values[names[0]]), dtype)
-        for n in names:
-            w *= np.square(np.clip(np.asarray(values[n], dtype), 0.0, None))
+        w = sum(np.square(np.clip(np.asarray(values[n], np.float64), 0.0, None)) for n in names)
         total = w.sum(axis=-1, keepdims=True)
-        return np.where(total > 0, w / np.where(total > 0, total, 1.0), dtype(1.0 / 3.0)).astype(dtype)
+        return np.where(total > 0, w / np.where(total > 0, total, 1.0), 1.0 / 3.0).astype(dtype)
 
     def features(self, values: dict[str, np.ndarray], channel: int | None) -> np.ndarray:
         """The map's input for source values (each an array: N for a scalar axis, N x 3 for an RGB

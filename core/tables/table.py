@@ -174,12 +174,13 @@ class TableMap:
             if o.per_channel:
                 out[o.param] = each_channel(o)
                 continue
-            shared = (o.from_unit(self.regressors[o.label].predict(at(None))) if weights is None
-                      else np.sum(each_channel(o) * weights, axis=-1))
-            if o.channel is not None:
-                chans.setdefault(o.param, [None] * 3)[o.channel] = shared
-            else:
-                out[o.param] = shared
+            if o.channel is not None:  # one channel of a target colour that is not separable: the mean grey
+                chans.setdefault(o.param, [None] * 3)[o.channel] = o.from_unit(
+                    self.regressors[o.label].predict(at(None)))
+            elif weights is None:
+                out[o.param] = o.from_unit(self.regressors[o.label].predict(at(None)))
+            else:  # a scalar the channels share
+                out[o.param] = np.sum(each_channel(o) * weights, axis=-1)
         out.update({k: np.stack(v, axis=-1) for k, v in chans.items()})
         return finish(self.table.outputs, out)
 

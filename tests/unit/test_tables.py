@@ -138,15 +138,16 @@ def test_an_output_the_channels_share_weighs_each_channel_by_its_brightness(tmp_
         **pt.params, "alpha": pt.values["alpha"] * (1 + pt.values["specular_reflectance"][0])}}) for pt in table.points]
     table = table.model_copy(update={"points": points})
     tmap = TableMap(table.model_copy(update={"candidates": fit_candidates(table)}), "multilinear")
-    colours = np.array([[0.3, 0.65, 1.0], [1.0, 0.3, 0.3], [0.0, 0.0, 0.0]])  # grid levels: multilinear is exact
-    got = tmap.predict({"alpha": np.full(3, 0.05), "specular_reflectance": colours})["alpha"]
-    each = 0.05 * (1 + np.where(colours > 0, colours, 0.3))  # black is clamped to the axis's lowest level
-    weights = np.array([c ** 2 / (c ** 2).sum() if c.any() else np.full(3, 1 / 3) for c in colours])
-    assert got == pytest.approx((each * weights).sum(axis=1), rel=1e-6)
+    colours = np.array([[0.3, 0.65, 1.0], [1.0, 0.3, 0.3]])  # grid levels: multilinear is exact
+    got = tmap.predict({"alpha": np.full(2, 0.05), "specular_reflectance": colours})["alpha"]
+    weights = colours ** 2 / (colours ** 2).sum(axis=1, keepdims=True)
+    assert got == pytest.approx((0.05 * (1 + colours) * weights).sum(axis=1), rel=1e-6)
     assert got[0] > 0.05 * (1 + colours[0].mean())  # not the mean grey level's
-    dense = DenseMap(tmap).predict({"alpha": np.full(3, 0.05, np.float32),
+    dense = DenseMap(tmap).predict({"alpha": np.full(2, 0.05, np.float32),
                                     "specular_reflectance": colours.astype(np.float32)})["alpha"]
     assert dense == pytest.approx(got, rel=1e-5)
+    assert table.layout.channel_weights({"specular_reflectance": np.zeros((1, 3))}) == pytest.approx(
+        np.full((1, 3), 1 / 3))  # black: the channels alike
 
 
 def test_only_a_fit_in_question_with_a_remedy_is_refitted_and_only_with_what_it_changes():
@@ -161,7 +162,41 @@ def test_only_a_fit_in_question_with_a_remedy_is_refitted_and_only_with_what_it_
     assert _remedy(point(["held_out_above", "not_at_minimum"]), Settings()) == {"scheme": "three"}
     assert _remedy(point(["not_at_minimum"]), Settings(scheme="three")) == {}  # already in effect
     assert _remedy(point(["cannot_resolve"]), Settings()) == {}  # no remedy to take
-    assert _remedy(point(["held_out_above"], used=True), Settings()) == {}  # not in question: kept as it is
+    assert _remedy(point(["not_at_minimum"], used=True), Settings()) == {}  # not in question: kept as it is
+
+
+def test_a_remedy_refit_replaces_the_first_fit_only_where_it_ends_lower(tmp_path):
+    """`remedy_points` with a runner that hands back finished fits (the refits' errors given): the
+    refit's record replaces the first where it is lower, says so and keeps the first's error; the
+    refit runs with scheme three, stored beside its point."""
+    from types import SimpleNamespace
+
+    from brdfremap.core.runner import Done
+    from brdfremap.core.tables.build import remedy_points
+    from brdfremap.core.tables.table import PointRecord
+
+    registry = collect_adapters()
+    p = plan(load_table_spec(_spec(tmp_path)), "spec.yaml", registry)
+    (i0, v0), (i1, v1), (i2, v2) = p.grid[:3]
+    first = [PointRecord(id=f"g{k}", index=list(i), values=v, params={"alpha": 0.1}, error=0.06, verdict="unreliable",
+                         findings=f, used=not f) for k, (i, v, f) in enumerate(
+        [(i0, v0, ["not_at_minimum"]), (i1, v1, ["not_at_minimum"]), (i2, v2, [])])]
+    errors = iter([0.02, 0.09])
+
+    class Handing:
+        tasks: list = []
+
+        def run(self, tasks):
+            Handing.tasks = tasks
+            return [Done(task=t, resumed=False, report=SimpleNamespace(
+                findings=[], params={"alpha": 0.2}, metrics=SimpleNamespace(relative_rmse=next(errors), noise_floor=0.01),
+                verdict="ok", reliable=True, reason="", renders=60, seconds=1.0, key="k")) for t in tasks]
+
+    out = remedy_points(p, registry, Handing(), p.spec.scene.scene(tmp_path), first)
+    assert [t.slot for t in Handing.tasks] == ["points/g0/remedy", "points/g1/remedy"]  # g2 is not in question
+    assert all(t.job.settings.scheme == "three" for t in Handing.tasks)
+    assert out[0].remedy == "scheme three" and out[0].first_error == 0.06 and out[0].error == 0.02 and out[0].used
+    assert out[1] == first[1] and out[2] == first[2]  # the refit ended higher: the first fit stays
 
 
 def test_a_table_file_is_versioned_and_an_edited_one_refused(tmp_path):
