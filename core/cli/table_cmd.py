@@ -79,6 +79,9 @@ def _summary(t) -> None:
           f"in {b.ran_in}")
     print("maps           held-out lookup error / direct fit error; cross-validated error on the grid (a fraction "
           "of each parameter's range)")
+    if any(c.channels == "mean" for c in t.candidates.values()):
+        print("               (-mean: a parameter the colour's channels share read at its mean grey level; the others "
+              "read it at each channel's and weigh them by the channel's value squared)")
     for m, c in t.candidates.items():
         if c.problem:
             print(f"    {m:<16} cannot be fitted here: {c.problem}")
