@@ -14,7 +14,6 @@ import csv
 import io
 import math
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -22,233 +21,27 @@ import numpy as np
 from ..atomic import write_text_atomic
 from ..errors import ConfigError
 from ..executors import Workers
-from ..job import Job, Lookup, Where, model_of, resolve
+from ..job import Lookup
 from ..plugins import AdapterRegistry
-from ..runner import Done, Runner, Task
-from ..schemas import Material, ModelSpec
+from ..runner import Done, Runner
 from ..store import Store, owned
 from .maps import METHODS, build, choose_hyperparameter
-from .spec import Layout, TableSpec
 from .outputs import choose_scales, outputs_for
-from .table import TABLE_SCHEMA_VERSION, BuildRecord, Candidate, PointRecord, Table, TableMap, grid_of, write_table
+from .plan import Plan, fitted_names, plan, point_task, record, shown
+from .refits import continue_points, leave_out_cliffs, refits_account, remedy_points
+from .spec import TableSpec
+from .table import (
+    TABLE_SCHEMA_VERSION,
+    BuildRecord,
+    Candidate,
+    Table,
+    TableMap,
+    grid_of,
+    write_table,
+)
 
-QUESTIONED = frozenset({"not_at_minimum", "cannot_resolve", "image_precision", "renderer_alters", "no_effect"})
-"""Findings that put the fit itself in question (it may not be the best this target does): such a
-point is left out of the regression. A mismatch, a held-out light over the threshold, a bound the
-fit presses on, parameters that trade off: the fit is still the closest the target gets, and kept."""
-REMEDIES: dict[str, dict] = {"not_at_minimum": {"scheme": "three"}}
-"""The refit a grid point's finding names as its remedy (the fit's own advice to a user: a fit that
-stopped short of a minimum of the full image is fitted again by scheme three, every parameter on
-the full image). The refit replaces the first fit where it ends lower."""
 PREFERENCE = ("polynomial", "rbf", "multilinear")
 """Order among maps that do equally well: the smoothest first."""
-
-
-@dataclass
-class Plan:
-    """A spec checked against the installed adapters: its layout and the jobs of its points."""
-
-    spec: TableSpec
-    file: str
-    layout: Layout
-    source_spec: ModelSpec
-    target_spec: ModelSpec
-    source_params: dict
-    grid: list[tuple[tuple[int, ...], dict]]
-    held: list[dict]
-
-
-def plan(spec: TableSpec, file: str, registry: AdapterRegistry) -> Plan:
-    """Every check before any render: axes are continuous parameters of the source within its
-    bounds, the target's discrete choices are held, and every point's job resolves."""
-    src = model_of(registry, spec.source.adapter, spec.source.model, file, "source.")
-    tgt = model_of(registry, spec.target.adapter, spec.target.model, file, "target.")
-    params = src.complete(spec.source.params, file=file, prefix="source.params")
-    kinds = {}
-    for name, ax in spec.axes.items():
-        kinds[name] = _axis_kind(src, name, ax, params, file)
-    same = (spec.source.adapter, spec.source.model) == (spec.target.adapter, spec.target.model)
-    for p in tgt.parameters:
-        if p.kind == "choice" and p.explore and not same and p.name not in spec.target.fix:
-            raise ConfigError(f"the fit would try each {p.name} and keep the best, point by point, and a map cannot "
-                              f"follow a choice: hold it (target.fix.{p.name}: one of {', '.join(p.choices)})",
-                              file=file, field="target.fix")
-    layout = Layout(spec.axes, kinds)
-    return Plan(spec, file, layout, src, tgt, {k: v for k, v in params.items() if k not in spec.axes},
-                layout.grid(), layout.draw(spec.holdout, spec.seed))
-
-
-def _axis_kind(src: ModelSpec, name: str, ax, params: dict, file: str) -> str:
-    field = f"axes.{name}"
-    if name not in src.names:
-        raise ConfigError(f"model {src.name!r} has no parameter {name!r} (known: {', '.join(src.names)})", file=file,
-                          field=field)
-    p = src.param(name)
-    if p.kind == "choice":
-        raise ConfigError(f"{name} is a choice ({', '.join(p.choices)}): an axis is a continuous parameter; give "
-                          "the choice in source.params (a table per value)", file=file, field=field)
-    if not src.is_active(name, params):
-        raise ConfigError(f"{name} does nothing with {', '.join(f'{k}={params[k]}' for k in p.active_when)}",
-                          file=file, field=field)
-    lo, hi = ax.range
-    if lo < p.lower or hi > p.upper:
-        raise ConfigError(f"range [{lo:g}, {hi:g}] goes outside {name}'s bounds [{p.lower:g}, {p.upper:g}]",
-                          file=file, field=f"{field}.range")
-    if p.kind == "scalar" and ax.mode == "channels":
-        raise ConfigError("mode channels is for an RGB parameter", file=file, field=f"{field}.mode")
-    if p.kind == "rgb" and ax.mode == "scale" and not p.separable:
-        raise ConfigError(f"{name}'s channels do not act alone in the image, so a grey sample cannot stand for a "
-                          "colour: use mode: channels", file=file, field=f"{field}.mode")
-    return p.kind
-
-
-def _material(p: Plan, values: dict, name: str) -> Material:
-    return Material(adapter=p.spec.source.adapter, model=p.spec.source.model,
-                    params={**p.spec.source.params, **values}, name=name)
-
-
-def _task(p: Plan, registry: AdapterRegistry, slot: str, values: dict, title: str, scene, settings,
-          lookup: Lookup | None = None) -> Task:
-    job = Job(source=_material(p, values, slot), target=p.spec.target, scene=scene, settings=settings,
-              label=f"{p.file} {slot}", lookup=lookup)
-    where = Where(source_file=p.file, source_prefix="source.", params_prefix=f"{slot} ({_shown(values)})",
-                  target_file=p.file, target_prefix="target.", fix_prefix="target.fix")
-    return Task(slot, resolve(job, registry, where).job, title)
-
-
-def _shown(values: dict) -> str:
-    return ", ".join(f"{k}=" + ("[" + ",".join(f"{x:.3g}" for x in v) + "]" if isinstance(v, list) else f"{v:.4g}")
-                     for k, v in values.items())
-
-
-def record(point_id: str, values: dict, done: Done, index: tuple[int, ...] = ()) -> PointRecord:
-    """What the table keeps of one fit, and whether the map may use it."""
-    r = done.report
-    if r is None:
-        return PointRecord(id=point_id, index=list(index), values=values, params=None, error=None, verdict="failed",
-                           reason=done.error, used=False, left_out=f"the fit failed: {done.error}")
-    kinds = [f.kind for f in r.findings if f.severity == "unreliable"]
-    questioned = [f.message for f in r.findings if f.severity == "unreliable" and f.kind in QUESTIONED]
-    return PointRecord(id=point_id, index=list(index), values=values, params=dict(r.params),
-                       error=r.metrics.relative_rmse, noise_floor=r.metrics.noise_floor, verdict=r.verdict,
-                       reason="" if r.reliable else r.reason, findings=kinds, used=not questioned,
-                       left_out="; ".join(questioned), renders=r.renders, seconds=r.seconds, key=r.key)
-
-
-def _mapped(p: Plan, points: list[PointRecord], done: list[Done]) -> list[str]:
-    """The target parameters the fits varied (in the model's order)."""
-    fitted = {n for d in done if d.report is not None for n in d.report.fitted}
-    return [n for n in p.target_spec.names if n in fitted]
-
-
-def remedy_points(p: Plan, registry: AdapterRegistry, runner: Runner, scene, points: list[PointRecord]
-                  ) -> list[PointRecord]:
-    """Each grid point whose fit is in question for a reason with a remedy (`REMEDIES`) fitted again
-    with it, stored as `points/<id>/remedy/`; the refit's record replaces the first where its error
-    is lower (and says so), whatever its own findings say (they decide whether the map uses it)."""
-    tasks, which = [], []
-    for i, pt in enumerate(points):
-        update = _remedy(pt, p.spec.options)
-        if update:
-            tasks.append(_task(p, registry, f"points/{pt.id}/remedy", pt.values, f"{pt.id} remedy "
-                               + " ".join(f"{k}={v}" for k, v in update.items()), scene,
-                               p.spec.options.model_copy(update=update)))
-            which.append(i)
-    out = list(points)
-    for i, d in zip(which, runner.run(tasks)):
-        first = points[i]
-        if d.report is not None and first.error is not None and d.report.metrics.relative_rmse < first.error:
-            out[i] = record(first.id, first.values, d, tuple(first.index)).model_copy(update={
-                "remedy": ", ".join(f"{k} {v}" for k, v in _remedy(first, p.spec.options).items()),
-                "first_error": first.error})
-    return out
-
-
-def _remedy(pt: PointRecord, options) -> dict:
-    """The settings the first remedy among the point's findings changes (none already in effect)."""
-    for kind in pt.findings:
-        update = {k: v for k, v in REMEDIES.get(kind, {}).items() if getattr(options, k) != v}
-        if update and not pt.used:
-            return update
-    return {}
-
-
-CONTINUE_SLACK, CONTINUE_NOISE, CONTINUE_SMOOTHING = 1.02, 0.5, 1e-3
-"""A refit from the neighbours' map replaces a point's first fit when its error is at most this much
-of the first's, plus this much of the render noise (at the noise, two fits are alike); the
-neighbours' map is an RBF of this smoothing."""
-
-
-def continue_points(p: Plan, registry: AdapterRegistry, runner: Runner, draft: Table) -> list[PointRecord]:
-    """Each grid point refitted from one start, the map of the other points' fits (continuation: a
-    fit that fell into another optimum than its neighbours' is led into theirs, where it is as
-    good); the refit replaces the first fit where its error is within `CONTINUE_SLACK` of it (and half
-    the render noise).
-    Stored as `points/<id>/continued/`."""
-    settings = draft.spec.options.model_copy(update={"starts": 1})
-    tasks, which = [], []
-    for i, pt in enumerate(draft.points):
-        if pt.params is None:
-            continue
-        start = _neighbours_map(draft, i).params(pt.values)[0]
-        job = Job(source=_material(p, pt.values, pt.id), target=draft.spec.target, scene=draft.scene,
-                  settings=settings, label=f"{p.file} points/{pt.id} continued", start=start)
-        tasks.append(Task(f"points/{pt.id}/continued", resolve(job, registry).job, f"{pt.id} continued"))
-        which.append(i)
-    points = list(draft.points)
-    for i, d in zip(which, runner.run(tasks)):
-        first, again = points[i], d.report
-        if again is not None and first.error is not None and again.metrics.relative_rmse <= (
-                CONTINUE_SLACK * first.error + CONTINUE_NOISE * (first.noise_floor or 0.0)):
-            points[i] = record(first.id, first.values, d, tuple(first.index)).model_copy(update={
-                "continued": True, "first_error": first.first_error or first.error, "remedy": first.remedy})
-    return points
-
-
-def _neighbours_map(draft: Table, i: int) -> TableMap:
-    """The map of every used point but the i-th (a thin-plate RBF, lightly smoothed)."""
-    others = [pt.model_copy(update={"used": False}) if j == i else pt for j, pt in enumerate(draft.points)]
-    hyper = {o.label: CONTINUE_SMOOTHING for o in draft.outputs}
-    return TableMap(draft.model_copy(update={"points": others, "candidates": {"rbf": Candidate(
-        method="rbf", hyper=hyper, cv_rms={})}}), "rbf")
-
-
-CLIFF_SPAN, CLIFF_MAD, CLIFF_SHARE = 0.15, 6.0, 0.1
-"""A used point is a cliff when a smooth map of its neighbours misses one of its parameters by over
-CLIFF_SPAN of the parameter's range and CLIFF_MAD times the points' median miss; at most
-CLIFF_SHARE of the points, the worst."""
-
-
-def leave_out_cliffs(draft: Table) -> list[PointRecord]:
-    """The points with the fits that landed in another optimum than their neighbours' (the paper's
-    cliffs: a parameter that jumps where the source changes a little) left out of the regression, and
-    said: a smooth map cannot follow a jump, and would carry it to every lookup around it."""
-    from .maps import cv_predictions
-
-    worst: dict[int, tuple[float, str]] = {}
-    for o in draft.outputs:
-        if o.kind == "error":
-            continue
-        grid = grid_of(draft, o)
-        try:
-            miss = np.abs(cv_predictions("rbf", grid, 1e-3) - grid.y)
-        except (ValueError, np.linalg.LinAlgError):
-            continue
-        seen = grid.used & np.isfinite(miss)
-        if not seen.any():
-            continue
-        mad = float(np.median(miss[seen]))
-        for i in np.flatnonzero(seen & (miss > max(CLIFF_SPAN, CLIFF_MAD * mad))):
-            if miss[i] > worst.get(int(i), (0.0, ""))[0]:
-                worst[int(i)] = (float(miss[i]), o.label)
-    cap = int(CLIFF_SHARE * len(draft.points))
-    chosen = sorted(worst.items(), key=lambda kv: -kv[1][0])[:cap]
-    points = list(draft.points)
-    for i, (miss, label) in chosen:
-        points[i] = points[i].model_copy(update={"used": False, "left_out": (
-            f"a cliff: its {label} is {miss:.0%} of the range off a smooth map of its neighbours' (its fit found "
-            "another optimum)")})
-    return points
 
 
 def fit_candidates(draft: Table) -> dict[str, Candidate]:
@@ -283,9 +76,9 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
     t0 = time.perf_counter()
     p = plan(spec, file, registry)
     scene = spec.scene.scene(Path(file).resolve().parent)
-    grid_tasks = [_task(p, registry, f"points/g{i:04d}", v, f"g{i:04d} {_shown(v)}", scene, spec.options)
+    grid_tasks = [point_task(p, registry, f"points/g{i:04d}", v, f"g{i:04d} {shown(v)}", scene, spec.options)
                   for i, (_, v) in enumerate(p.grid)]
-    held_tasks = [_task(p, registry, f"holdout/h{i:03d}", v, f"h{i:03d} {_shown(v)}", scene, spec.options)
+    held_tasks = [point_task(p, registry, f"holdout/h{i:03d}", v, f"h{i:03d} {shown(v)}", scene, spec.options)
                   for i, v in enumerate(p.held)]
     with owned(out) as folder:
         runner = Runner(Store(folder), workers, renderer_files=tuple(registry.loaded_files()), quiet=quiet,
@@ -302,7 +95,7 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
                               file=file)
         held = [record(t.slot.split("/")[1], v, d) for t, v, d in zip(held_tasks, p.held, held_done)]
         first = next(d.report for d, pt in zip(grid_done, points) if pt.used)
-        draft = _draft(p, file, spec, points, held, _mapped(p, points, grid_done), first, scene)
+        draft = _draft(p, file, spec, points, held, fitted_names(p, points, grid_done), first, scene)
         draft = draft.model_copy(update={"outputs": choose_scales(draft.outputs, lambda o: grid_of(draft, o))})
         if spec.continuation:
             draft = draft.model_copy(update={"points": continue_points(p, registry, runner, draft)})
@@ -316,7 +109,7 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
         table = draft.model_copy(update={"candidates": candidates, "chosen": chosen, "chosen_why": why})
         renders, seconds = checks_account(folder, table)
         final = table.points  # after continuation and the cliffs
-        refit_renders, refit_seconds = _refits(folder, final)
+        refit_renders, refit_seconds = refits_account(folder, final)
         table = table.model_copy(update={"build": BuildRecord(
             points=len(final), used=sum(pt.used for pt in final),
             flagged=sum(pt.verdict in ("unreliable", "failed") for pt in final),
@@ -342,21 +135,6 @@ def _draft(p: Plan, file: str, spec: TableSpec, points, held, names, first, scen
                  points=points, holdout=held, candidates={}, chosen="", chosen_why="",
                  build=BuildRecord(points=0, used=0, flagged=0, left_out=0, holdout=0, renders=0, seconds=0,
                                    wall_seconds=0, ran_in=""))
-
-
-def _refits(folder: Path, points: list[PointRecord]) -> tuple[int, float]:
-    """Target renders and seconds of the refits stored (remedies and continuation, kept or not)."""
-    from ..report import read_report
-
-    renders, seconds = 0, 0.0
-    for pt in points:
-        for refit in ("remedy", "continued"):
-            try:
-                r = read_report(folder / "points" / pt.id / refit / "result.json")
-            except ConfigError:
-                continue
-            renders, seconds = renders + r.renders, seconds + r.seconds
-    return renders, seconds
 
 
 def checks_account(folder: Path, table: Table) -> tuple[int, float]:
@@ -392,7 +170,7 @@ def _check_holdout(p: Plan, registry: AdapterRegistry, runner: Runner, draft: Ta
             params, expected = tmap.params(h.values)
             lookup = Lookup(table=draft.name, digest="draft", method=method, params=params,
                             expected_error=expected)
-            tasks.append(_task(p, registry, f"checks/{method}/{h.id}", h.values, f"{method} {h.id}", draft.scene,
+            tasks.append(point_task(p, registry, f"checks/{method}/{h.id}", h.values, f"{method} {h.id}", draft.scene,
                                settings, lookup))
             where.append((method, i))
     results = runner.run(tasks)

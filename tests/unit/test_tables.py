@@ -152,7 +152,7 @@ def test_an_output_the_channels_share_weighs_each_channel_by_its_brightness(tmp_
 
 def test_only_a_fit_in_question_with_a_remedy_is_refitted_and_only_with_what_it_changes():
     from brdfremap.core.settings import Settings
-    from brdfremap.core.tables.build import _remedy
+    from brdfremap.core.tables.refits import _remedy
     from brdfremap.core.tables.table import PointRecord
 
     def point(findings, used=False):
@@ -172,7 +172,7 @@ def test_a_remedy_refit_replaces_the_first_fit_only_where_it_ends_lower(tmp_path
     from types import SimpleNamespace
 
     from brdfremap.core.runner import Done
-    from brdfremap.core.tables.build import remedy_points
+    from brdfremap.core.tables.refits import remedy_points
     from brdfremap.core.tables.table import PointRecord
 
     registry = collect_adapters()

@@ -1,0 +1,146 @@
+"""Refits of a table's grid points, each a remap job stored beside its point: the remedy a fit's
+finding names (`remedy_points`), continuation from the neighbours' map (`continue_points`), cliffs
+left out (`leave_out_cliffs`), and what all refits cost (`refits_account`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..job import Job, resolve
+from ..plugins import AdapterRegistry
+from ..runner import Runner, Task
+from .plan import Plan, material, point_task, record
+from .table import Candidate, PointRecord, Table, TableMap, grid_of
+
+REMEDIES: dict[str, dict] = {"not_at_minimum": {"scheme": "three"}}
+"""The refit a grid point's finding names as its remedy (the fit's own advice to a user: a fit that
+stopped short of a minimum of the full image is fitted again by scheme three, every parameter on
+the full image). The refit replaces the first fit where it ends lower."""
+def remedy_points(p: Plan, registry: AdapterRegistry, runner: Runner, scene, points: list[PointRecord]
+                  ) -> list[PointRecord]:
+    """Each grid point whose fit is in question for a reason with a remedy (`REMEDIES`) fitted again
+    with it, stored as `points/<id>/remedy/`; the refit's record replaces the first where its error
+    is lower (and says so), whatever its own findings say (they decide whether the map uses it)."""
+    tasks, which = [], []
+    for i, pt in enumerate(points):
+        update = _remedy(pt, p.spec.options)
+        if update:
+            tasks.append(point_task(p, registry, f"points/{pt.id}/remedy", pt.values, f"{pt.id} remedy "
+                               + " ".join(f"{k}={v}" for k, v in update.items()), scene,
+                               p.spec.options.model_copy(update=update)))
+            which.append(i)
+    out = list(points)
+    for i, d in zip(which, runner.run(tasks)):
+        first = points[i]
+        if d.report is not None and first.error is not None and d.report.metrics.relative_rmse < first.error:
+            out[i] = record(first.id, first.values, d, tuple(first.index)).model_copy(update={
+                "remedy": ", ".join(f"{k} {v}" for k, v in _remedy(first, p.spec.options).items()),
+                "first_error": first.error})
+    return out
+
+
+def _remedy(pt: PointRecord, options) -> dict:
+    """The settings the first remedy among the point's findings changes (none already in effect)."""
+    for kind in pt.findings:
+        update = {k: v for k, v in REMEDIES.get(kind, {}).items() if getattr(options, k) != v}
+        if update and not pt.used:
+            return update
+    return {}
+
+
+CONTINUE_SLACK, CONTINUE_NOISE, CONTINUE_SMOOTHING = 1.02, 0.5, 1e-3
+"""A refit from the neighbours' map replaces a point's first fit when its error is at most this much
+of the first's, plus this much of the render noise (at the noise, two fits are alike); the
+neighbours' map is an RBF of this smoothing."""
+
+
+def continue_points(p: Plan, registry: AdapterRegistry, runner: Runner, draft: Table) -> list[PointRecord]:
+    """Each grid point refitted from one start, the map of the other points' fits (continuation: a
+    fit that fell into another optimum than its neighbours' is led into theirs, where it is as
+    good); the refit replaces the first fit where its error is within `CONTINUE_SLACK` of it (and half
+    the render noise).
+    Stored as `points/<id>/continued/`."""
+    settings = draft.spec.options.model_copy(update={"starts": 1})
+    tasks, which = [], []
+    for i, pt in enumerate(draft.points):
+        if pt.params is None:
+            continue
+        start = _neighbours_map(draft, i).params(pt.values)[0]
+        job = Job(source=material(p, pt.values, pt.id), target=draft.spec.target, scene=draft.scene,
+                  settings=settings, label=f"{p.file} points/{pt.id} continued", start=start)
+        tasks.append(Task(f"points/{pt.id}/continued", resolve(job, registry).job, f"{pt.id} continued"))
+        which.append(i)
+    points = list(draft.points)
+    for i, d in zip(which, runner.run(tasks)):
+        first, again = points[i], d.report
+        if again is not None and first.error is not None and again.metrics.relative_rmse <= (
+                CONTINUE_SLACK * first.error + CONTINUE_NOISE * (first.noise_floor or 0.0)):
+            points[i] = record(first.id, first.values, d, tuple(first.index)).model_copy(update={
+                "continued": True, "first_error": first.first_error or first.error, "remedy": first.remedy})
+    return points
+
+
+def _neighbours_map(draft: Table, i: int) -> TableMap:
+    """The map of every used point but the i-th (a thin-plate RBF, lightly smoothed)."""
+    others = [pt.model_copy(update={"used": False}) if j == i else pt for j, pt in enumerate(draft.points)]
+    hyper = {o.label: CONTINUE_SMOOTHING for o in draft.outputs}
+    return TableMap(draft.model_copy(update={"points": others, "candidates": {"rbf": Candidate(
+        method="rbf", hyper=hyper, cv_rms={})}}), "rbf")
+
+
+CLIFF_SPAN, CLIFF_MAD, CLIFF_SHARE = 0.15, 6.0, 0.1
+"""A used point is a cliff when a smooth map of its neighbours misses one of its parameters by over
+CLIFF_SPAN of the parameter's range and CLIFF_MAD times the points' median miss; at most
+CLIFF_SHARE of the points, the worst."""
+
+
+def leave_out_cliffs(draft: Table) -> list[PointRecord]:
+    """The points with the fits that landed in another optimum than their neighbours' (the paper's
+    cliffs: a parameter that jumps where the source changes a little) left out of the regression, and
+    said: a smooth map cannot follow a jump, and would carry it to every lookup around it."""
+    from .maps import cv_predictions
+
+    worst: dict[int, tuple[float, str]] = {}
+    for o in draft.outputs:
+        if o.kind == "error":
+            continue
+        grid = grid_of(draft, o)
+        try:
+            miss = np.abs(cv_predictions("rbf", grid, 1e-3) - grid.y)
+        except (ValueError, np.linalg.LinAlgError):
+            continue
+        seen = grid.used & np.isfinite(miss)
+        if not seen.any():
+            continue
+        mad = float(np.median(miss[seen]))
+        for i in np.flatnonzero(seen & (miss > max(CLIFF_SPAN, CLIFF_MAD * mad))):
+            if miss[i] > worst.get(int(i), (0.0, ""))[0]:
+                worst[int(i)] = (float(miss[i]), o.label)
+    cap = int(CLIFF_SHARE * len(draft.points))
+    chosen = sorted(worst.items(), key=lambda kv: -kv[1][0])[:cap]
+    points = list(draft.points)
+    for i, (miss, label) in chosen:
+        points[i] = points[i].model_copy(update={"used": False, "left_out": (
+            f"a cliff: its {label} is {miss:.0%} of the range off a smooth map of its neighbours' (its fit found "
+            "another optimum)")})
+    return points
+
+
+def refits_account(folder: Path, points: list[PointRecord]) -> tuple[int, float]:
+    """Target renders and seconds of the refits stored (remedies and continuation, kept or not)."""
+    from ..report import read_report
+
+    renders, seconds = 0, 0.0
+    for pt in points:
+        for refit in ("remedy", "continued"):
+            try:
+                r = read_report(folder / "points" / pt.id / refit / "result.json")
+            except ConfigError:
+                continue
+            renders, seconds = renders + r.renders, seconds + r.seconds
+    return renders, seconds
+
+
