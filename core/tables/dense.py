@@ -9,7 +9,7 @@ import itertools
 
 import numpy as np
 
-from .outputs import ERROR, finish
+from .outputs import ERROR, assemble
 from .table import TableMap
 
 NODES = {1: 257, 2: 129, 3: 49, 4: 21}
@@ -86,24 +86,11 @@ class DenseMap:
                 cells[channel] = _Cells(layout.columns(values, channel, np.float32), self.shape)
             return cells[channel]
 
-        weights = layout.channel_weights(values, np.float32) if self.tmap.weighted else None
-        out: dict[str, np.ndarray] = {}
-        chans: dict[str, list] = {}
-        for o in self.table.outputs:
-            if o.kind == "error" and not errors:
-                continue
-            lut = self.luts[o.label]
-            if o.per_channel:
-                out[o.param] = np.stack([_decode(o, at(c).interpolate(lut)) for c in range(3)], axis=-1)
-                continue
-            if o.channel is not None:  # as TableMap.predict
-                chans.setdefault(o.param, [None] * 3)[o.channel] = _decode(o, at(None).interpolate(lut))
-            elif weights is None:
-                out[o.param] = _decode(o, at(None).interpolate(lut))
-            else:
-                out[o.param] = sum(weights[:, c] * _decode(o, at(c).interpolate(lut)) for c in range(3))
-        out.update({k: np.stack(v, axis=-1) for k, v in chans.items()})
-        return finish(self.table.outputs, out)
+        outputs = [o for o in self.table.outputs if errors or o.kind != "error"]
+        return assemble(outputs,
+                        lambda o: [_decode(o, at(c).interpolate(self.luts[o.label])) for c in range(3)],
+                        lambda o: _decode(o, at(None).interpolate(self.luts[o.label])),
+                        layout.channel_weights(values, np.float32) if self.tmap.weighted else None)
 
 
 def _decode(output, t: np.ndarray) -> np.ndarray:

@@ -10,6 +10,7 @@ table maps those and turns them back into eta and k."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from typing import Any, Literal
 
 import numpy as np
@@ -104,6 +105,29 @@ def target_value(params: dict[str, Any] | None, error: float | None, output: Out
     if output.kind == "rgb":
         v = float(np.mean(v)) if output.channel is None else float(np.asarray(v)[output.channel])
     return float(output.to_unit(v))
+
+
+def assemble(outputs: list[Output], each_channel: Callable[[Output], Sequence[np.ndarray]],
+             at_mean: Callable[[Output], np.ndarray], weights: np.ndarray | None) -> dict[str, np.ndarray]:
+    """Target values from an output's lookups at each channel's grey level (``each_channel``: three
+    arrays of N, red first)
+    and at the mean grey level (``at_mean``: N), whichever it needs: an RGB parameter mapped channel
+    by channel takes the first; one channel of a target colour that is not separable the second; a
+    scalar the channels share the first averaged with ``weights`` (N x 3, `Layout.channel_weights`),
+    or the second where there are none. Then `finish`."""
+    out: dict[str, np.ndarray] = {}
+    chans: dict[str, list] = {}
+    for o in outputs:
+        if o.per_channel:
+            out[o.param] = np.stack(each_channel(o), axis=-1)
+        elif o.channel is not None:
+            chans.setdefault(o.param, [None] * 3)[o.channel] = at_mean(o)
+        elif weights is None:
+            out[o.param] = at_mean(o)
+        else:  # no N x 3 array in between: a texture's millions of texels
+            out[o.param] = sum(weights[:, c] * v for c, v in enumerate(each_channel(o)))
+    out.update({k: np.stack(v, axis=-1) for k, v in chans.items()})
+    return finish(outputs, out)
 
 
 def finish(outputs: list[Output], values: dict[str, np.ndarray]) -> dict[str, np.ndarray]:

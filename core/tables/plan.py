@@ -76,15 +76,16 @@ def _axis_kind(src: ModelSpec, name: str, ax, params: dict, file: str) -> str:
     return p.kind
 
 
-def material(p: Plan, values: dict, name: str) -> Material:
+def _material(p: Plan, values: dict, name: str) -> Material:
     return Material(adapter=p.spec.source.adapter, model=p.spec.source.model,
                     params={**p.spec.source.params, **values}, name=name)
 
 
 def point_task(p: Plan, registry: AdapterRegistry, slot: str, values: dict, title: str, scene, settings,
-          lookup: Lookup | None = None) -> Task:
-    job = Job(source=material(p, values, slot), target=p.spec.target, scene=scene, settings=settings,
-              label=f"{p.file} {slot}", lookup=lookup)
+               lookup: Lookup | None = None, start: dict | None = None) -> Task:
+    """The job of one point (a fit, a refit from ``start``, or a lookup's check) stored at ``slot``."""
+    job = Job(source=_material(p, values, slot), target=p.spec.target, scene=scene, settings=settings,
+              label=f"{p.file} {slot}", lookup=lookup, start=start)
     where = Where(source_file=p.file, source_prefix="source.", params_prefix=f"{slot} ({shown(values)})",
                   target_file=p.file, target_prefix="target.", fix_prefix="target.fix")
     return Task(slot, resolve(job, registry, where).job, title)

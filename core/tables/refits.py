@@ -9,16 +9,17 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
-from ..job import Job, resolve
 from ..plugins import AdapterRegistry
-from ..runner import Runner, Task
-from .plan import Plan, material, point_task, record
+from ..runner import Runner
+from .plan import Plan, point_task, record
 from .table import Candidate, PointRecord, Table, TableMap, grid_of
 
 REMEDIES: dict[str, dict] = {"not_at_minimum": {"scheme": "three"}}
 """The refit a grid point's finding names as its remedy (the fit's own advice to a user: a fit that
 stopped short of a minimum of the full image is fitted again by scheme three, every parameter on
 the full image). The refit replaces the first fit where it ends lower."""
+
+
 def remedy_points(p: Plan, registry: AdapterRegistry, runner: Runner, scene, points: list[PointRecord]
                   ) -> list[PointRecord]:
     """Each grid point whose fit is in question for a reason with a remedy (`REMEDIES`) fitted again
@@ -29,16 +30,15 @@ def remedy_points(p: Plan, registry: AdapterRegistry, runner: Runner, scene, poi
         update = _remedy(pt, p.spec.options)
         if update:
             tasks.append(point_task(p, registry, f"points/{pt.id}/remedy", pt.values, f"{pt.id} remedy "
-                               + " ".join(f"{k}={v}" for k, v in update.items()), scene,
-                               p.spec.options.model_copy(update=update)))
-            which.append(i)
+                                    + " ".join(f"{k}={v}" for k, v in update.items()), scene,
+                                    p.spec.options.model_copy(update=update)))
+            which.append((i, ", ".join(f"{k} {v}" for k, v in update.items())))
     out = list(points)
-    for i, d in zip(which, runner.run(tasks)):
+    for (i, said), d in zip(which, runner.run(tasks)):
         first = points[i]
         if d.report is not None and first.error is not None and d.report.metrics.relative_rmse < first.error:
             out[i] = record(first.id, first.values, d, tuple(first.index)).model_copy(update={
-                "remedy": ", ".join(f"{k} {v}" for k, v in _remedy(first, p.spec.options).items()),
-                "first_error": first.error})
+                "remedy": said, "first_error": first.error})
     return out
 
 
@@ -69,9 +69,8 @@ def continue_points(p: Plan, registry: AdapterRegistry, runner: Runner, draft: T
         if pt.params is None:
             continue
         start = _neighbours_map(draft, i).params(pt.values)[0]
-        job = Job(source=material(p, pt.values, pt.id), target=draft.spec.target, scene=draft.scene,
-                  settings=settings, label=f"{p.file} points/{pt.id} continued", start=start)
-        tasks.append(Task(f"points/{pt.id}/continued", resolve(job, registry).job, f"{pt.id} continued"))
+        tasks.append(point_task(p, registry, f"points/{pt.id}/continued", pt.values, f"{pt.id} continued",
+                                draft.scene, settings, start=start))
         which.append(i)
     points = list(draft.points)
     for i, d in zip(which, runner.run(tasks)):

@@ -18,7 +18,7 @@ from ..errors import ConfigError
 from ..model import Strict, WithDerived
 from ..scene import ProbeScene
 from .maps import Grid, Regressor, build
-from .outputs import ERROR, Output, finish, target_value
+from .outputs import ERROR, Output, assemble, target_value
 from .spec import Layout, TableSpec
 
 TABLE_SCHEMA_VERSION = 2
@@ -162,27 +162,13 @@ class TableMap:
                 features[channel] = layout.features(arr, channel)
             return features[channel]
 
-        weights = layout.channel_weights(arr) if self.weighted else None
-
-        def each_channel(o: Output) -> np.ndarray:  # N x 3: the three channels' coordinates in one call
+        def each_channel(o: Output) -> np.ndarray:  # 3 x N: the three channels' coordinates in one call
             return o.from_unit(self.regressors[o.label].predict(np.concatenate([at(c) for c in range(3)]))
-                               ).reshape(3, -1).T
+                               ).reshape(3, -1)
 
-        out: dict[str, np.ndarray] = {}
-        chans: dict[str, list] = {}
-        for o in self.table.outputs:
-            if o.per_channel:
-                out[o.param] = each_channel(o)
-                continue
-            if o.channel is not None:  # one channel of a target colour that is not separable: the mean grey
-                chans.setdefault(o.param, [None] * 3)[o.channel] = o.from_unit(
-                    self.regressors[o.label].predict(at(None)))
-            elif weights is None:
-                out[o.param] = o.from_unit(self.regressors[o.label].predict(at(None)))
-            else:  # a scalar the channels share
-                out[o.param] = np.sum(each_channel(o) * weights, axis=-1)
-        out.update({k: np.stack(v, axis=-1) for k, v in chans.items()})
-        return finish(self.table.outputs, out)
+        return assemble(self.table.outputs, each_channel,
+                        lambda o: o.from_unit(self.regressors[o.label].predict(at(None))),
+                        layout.channel_weights(arr) if self.weighted else None)
 
     def params(self, values: dict[str, Any]) -> tuple[dict[str, Any], float]:
         """One material's complete target parameters and the error a direct fit reaches there."""
