@@ -1,13 +1,14 @@
 """Remap tables: how close a lookup comes to a direct fit, how fast lookups are, and what a build costs.
 
-    python bench/tables.py accuracy TABLE... --out DIR [--n 50] [--jobs 2]
+    python bench/tables.py accuracy TABLE... --out DIR [--n 50] [--jobs 2] [--maps rbf,rbf+colours]
     python bench/tables.py speed TABLE [--size 2048]
     python bench/tables.py builds TABLE...
 
 accuracy: for each table, ``n`` source materials drawn at random inside its range (a Sobol' draw of
 another seed than the table's own held-out set, colours not grey) are fitted directly and looked up
 through the table, both as ordinary jobs (stored in DIR: an interrupted run resumes) with the
-table's scene and settings, held-out lights off (the fit's error is what is compared). Prints the
+table's scene and settings, held-out lights off (the fit's error is what is compared); with the
+table's chosen map, or each of `--maps`. Prints the
 median and 95th percentile of lookup error / direct fit error, and the errors themselves.
 
 speed: one material's lookup (the map's evaluation, warm; and reading the table), and a texture set
@@ -45,38 +46,37 @@ def accuracy(args) -> None:
     rows, tails = [], []
     with workers(args.jobs) as w, adapter_pool(registry):
         for path in args.tables:
-            t0 = time.perf_counter()
             table = read_table(path)
-            tmap = TableMap(table)
-            spec = table.spec
-            scene = table.scene
-            settings = spec.options.model_copy(update={"validation": "none"})
-            drawn = table.layout.draw(args.n, ACCURACY_SEED)
-            store = Store(Path(args.out) / Path(path).resolve().name)
-            direct, lookups = [], []
-            for i, values in enumerate(drawn):
-                src = Material(adapter=spec.source.adapter, model=spec.source.model,
-                               params={**spec.source.params, **values}, name=f"r{i:03d}")
-                job = Job(source=src, target=spec.target, scene=scene, settings=settings, label=f"bench r{i:03d}")
-                direct.append(Task(f"direct/r{i:03d}", resolve(job, registry).job, f"direct r{i:03d}"))
-                lk = look_up(table, tmap, values).lookup
-                lookups.append(Task(f"lookup/r{i:03d}", resolve(job.model_copy(update={"lookup": lk}),
-                                                                 registry).job, f"lookup r{i:03d}"))
-            done = Runner(store, w, quiet=args.quiet, stop_on_error=False).run(direct + lookups)
-            def err(d, start=False):
-                m = d.report.metrics if d.report else None
-                return np.nan if m is None else (m.start_error if start else m.relative_rmse) or np.nan
-
-            d_err = np.array([err(d) for d in done[:args.n]])
-            a_err = np.array([err(d, start=True) for d in done[:args.n]])  # the exporters' conversion
-            l_err = np.array([err(d) for d in done[args.n:]])
-            ratio, analytic = l_err / d_err, a_err / d_err
-            ok = np.isfinite(ratio)
-            rows.append((table.name, tmap.method, int(ok.sum()), float(np.median(ratio[ok])),
-                         float(np.percentile(ratio[ok], 95)), float(np.max(ratio[ok])), float(np.mean(ratio[ok] <= 1.05)),
-                         float(np.nanmedian(analytic)), float(np.median(d_err[ok])), float(np.median(l_err[ok])),
-                         time.perf_counter() - t0))
-            tails.append((table.name, _worst(drawn, d_err, l_err)))
+            for method in (args.maps.split(",") if args.maps else [table.chosen]):
+                t0 = time.perf_counter()
+                if method not in table.candidates:
+                    raise SystemExit(f"{path}: no map {method!r} (its maps: {', '.join(table.candidates)})")
+                tmap = TableMap(table, method)
+                spec = table.spec
+                settings = spec.options.model_copy(update={"validation": "none"})
+                drawn = table.layout.draw(args.n, ACCURACY_SEED)
+                store = Store(Path(args.out) / Path(path).resolve().name)
+                direct, lookups = [], []
+                for i, values in enumerate(drawn):
+                    src = Material(adapter=spec.source.adapter, model=spec.source.model,
+                                   params={**spec.source.params, **values}, name=f"r{i:03d}")
+                    job = Job(source=src, target=spec.target, scene=table.scene, settings=settings,
+                              label=f"bench r{i:03d}")
+                    direct.append(Task(f"direct/r{i:03d}", resolve(job, registry).job, f"direct r{i:03d}"))
+                    lk = look_up(table, tmap, values).lookup
+                    lookups.append(Task(f"lookup/{method}/r{i:03d}", resolve(job.model_copy(update={"lookup": lk}),
+                                                                             registry).job, f"lookup r{i:03d}"))
+                done = Runner(store, w, quiet=args.quiet, stop_on_error=False).run(direct + lookups)
+                d_err = np.array([_err(d) for d in done[:args.n]])
+                a_err = np.array([_err(d, start=True) for d in done[:args.n]])  # the exporters' conversion
+                l_err = np.array([_err(d) for d in done[args.n:]])
+                ratio, analytic = l_err / d_err, a_err / d_err
+                ok = np.isfinite(ratio)
+                rows.append((table.name, method, int(ok.sum()), float(np.median(ratio[ok])),
+                             float(np.percentile(ratio[ok], 95)), float(np.max(ratio[ok])),
+                             float(np.mean(ratio[ok] <= 1.05)), float(np.nanmedian(analytic)),
+                             float(np.median(d_err[ok])), float(np.median(l_err[ok])), time.perf_counter() - t0))
+                tails.append((f"{table.name} ({method})", _worst(drawn, d_err, l_err)))
     print(f"{'table':<62} {'map':<16} {'n':>3} {'median':>7} {'p95':>6} {'max':>6} {'<=1.05':>7} {'analytic':>8} "
           f"{'direct':>7} {'lookup':>7} {'s':>6}")
     for name, method, n, med, p95, worst, frac, ana, d, lk, secs in rows:
@@ -90,13 +90,18 @@ def accuracy(args) -> None:
             print(f"  {line}")
 
 
+def _err(done, start=False) -> float:
+    m = done.report.metrics if done.report else None
+    return np.nan if m is None else (m.start_error if start else m.relative_rmse) or np.nan
+
+
 def _worst(drawn: list[dict], d_err: np.ndarray, l_err: np.ndarray, k: int = 3) -> list[str]:
     """The k materials whose lookups are furthest from their direct fits (ratio), with both errors."""
     ratio = l_err / d_err
     ratio = np.where(np.isfinite(ratio), ratio, -np.inf)
     lines = []
     for i in np.argsort(-ratio)[:k]:
-        shown = ", ".join(f"{n} {np.round(np.mean(v), 3) if np.ndim(v) else round(float(v), 3)}"
+        shown = ", ".join(f"{n} {np.round(v, 3).tolist() if np.ndim(v) else round(float(v), 3)}"
                           for n, v in drawn[i].items())
         lines.append(f"r{i:03d} ({shown}): lookup {l_err[i]:.2%} / direct {d_err[i]:.2%} = {ratio[i]:.2f}")
     return lines
@@ -199,6 +204,8 @@ def main() -> None:
     p.add_argument("tables", nargs="+", metavar="TABLE")
     p.add_argument("--out", default="out/bench-tables", help="accuracy: where the fits are stored")
     p.add_argument("--n", type=int, default=50, help="accuracy: materials drawn per table")
+    p.add_argument("--maps", default="", help="accuracy: the table's maps to look up with, comma-separated "
+                                              "(default: its chosen one)")
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--size", type=int, default=2048, help="speed: texels across the texture set")
     p.add_argument("--quiet", action="store_true")

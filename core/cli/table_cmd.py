@@ -75,6 +75,10 @@ def _summary(t) -> None:
           f"({b.left_out - cliffs} whose fit is in question, {cliffs} cliffs)"
           + (f"; {remedied} refitted as their findings advised" if remedied else "")
           + (f"; {continued} continued from their neighbours" if t.spec.continuation else ""))
+    if t.colours:
+        used = sum(pt.used for pt in t.colours)
+        print(f"colours        {len(t.colours)} coloured points fitted, {used} usable, to correct the maps where the "
+              "target couples a colour's channels (+colours: a map with that correction)")
     print(f"cost           {b.renders} target renders, {b.seconds:.0f} s of fits; this build {b.wall_seconds:.1f} s "
           f"in {b.ran_in}")
     print("maps           held-out lookup error / direct fit error; cross-validated error on the grid (a fraction "
@@ -84,13 +88,16 @@ def _summary(t) -> None:
               "read it at each channel's and weigh them by the channel's value squared)")
     for m, c in t.candidates.items():
         if c.problem:
-            print(f"    {m:<16} cannot be fitted here: {c.problem}")
+            print(f"    {m:<24} cannot be fitted here: {c.problem}")
             continue
         held = (f"median {c.median_ratio:.3f}, 95th percentile {c.p95_ratio:.3f}" if c.median_ratio is not None
                 else "no held-out lookups")
         cv = ", ".join(f"{k} " + ("–" if v is None else f"{v:.3f}") for k, v in c.cv_rms.items() if k != "error")
+        if c.correction_cv:
+            cv += "; corrected " + ", ".join(f"{k} {before:.3f}->{after:.3f}" for k, (before, after)
+                                             in c.correction_cv.items() if k != "error")
         mark = "*" if m == t.chosen else " "
-        print(f"  {mark} {m:<16} {held}; {cv}")
+        print(f"  {mark} {m:<24} {held}; {cv}")
     print(f"chosen         {t.chosen}: {t.chosen_why}")
 
 

@@ -25,6 +25,7 @@ from ..job import Lookup
 from ..plugins import AdapterRegistry
 from ..runner import Done, Runner
 from ..store import Store, owned
+from .colours import choose_degree
 from .maps import METHODS, build, choose_hyperparameter
 from .outputs import choose_scales, outputs_for
 from .plan import Plan, fitted_names, plan, point_task, record, shown
@@ -36,6 +37,7 @@ from .table import (
     Candidate,
     Table,
     TableMap,
+    correction_rows,
     grid_of,
     write_table,
 )
@@ -62,6 +64,29 @@ def fit_candidates(draft: Table) -> dict[str, Candidate]:
         out[method] = Candidate(method=method, hyper=hyper, cv_rms=cv)
         if _shares_channels(draft):  # the same map, the colour read at its mean grey level
             out[f"{method}-mean"] = out[method].model_copy(update={"channels": "mean"})
+    if draft.colours:
+        out.update(corrected_candidates(draft, out))
+    return out
+
+
+def corrected_candidates(draft: Table, candidates: dict[str, Candidate]) -> dict[str, Candidate]:
+    """Each map with the coloured points' correction (`colours`): per output, the polynomial degree
+    cross-validation chooses, where it misses the points less than the map alone."""
+    table = draft.model_copy(update={"candidates": candidates})
+    out = {}
+    for name, c in candidates.items():
+        if c.problem:
+            continue
+        tmap = TableMap(table, name)
+        degrees, cv = {}, {}
+        for o in draft.outputs:
+            if not o.per_channel:  # a shared parameter is the bright channels' (`Layout.channel_weights`)
+                continue
+            degree, err, before = choose_degree(correction_rows(table, tmap, o))
+            if err < before:
+                degrees[o.label], cv[o.label] = degree, [before, err]
+        if degrees:
+            out[f"{name}+colours"] = c.model_copy(update={"correction": degrees, "correction_cv": cv})
     return out
 
 
@@ -80,13 +105,18 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
                   for i, (_, v) in enumerate(p.grid)]
     held_tasks = [point_task(p, registry, f"holdout/h{i:03d}", v, f"h{i:03d} {shown(v)}", scene, spec.options)
                   for i, v in enumerate(p.held)]
+    colour_tasks = [point_task(p, registry, f"colours/c{i:04d}", v, f"c{i:04d} {shown(v)}", scene, spec.options)
+                    for i, v in enumerate(p.colours)]
     with owned(out) as folder:
         runner = Runner(Store(folder), workers, renderer_files=tuple(registry.loaded_files()), quiet=quiet,
                         stop_on_error=False, line=_line)
-        done = runner.run(grid_tasks + held_tasks)
-        grid_done, held_done = done[:len(grid_tasks)], done[len(grid_tasks):]
+        done = runner.run(grid_tasks + held_tasks + colour_tasks)
+        n, m = len(grid_tasks), len(grid_tasks) + len(held_tasks)
+        grid_done, held_done, colour_done = done[:n], done[n:m], done[m:]
         firsts = [record(t.slot.split("/")[1], v, d, idx) for t, (idx, v), d in zip(grid_tasks, p.grid, grid_done)]
         points = remedy_points(p, registry, runner, scene, firsts)
+        first_colours = [record(t.slot.split("/")[1], v, d) for t, v, d in zip(colour_tasks, p.colours, colour_done)]
+        colours = remedy_points(p, registry, runner, scene, first_colours, "colours")
         need = len(p.layout.dims) + 2
         if sum(pt.used for pt in points) < need:
             write_points_csv(folder / "points.csv", _draft(p, file, spec, points, [], [], None, scene))
@@ -95,7 +125,8 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
                               file=file)
         held = [record(t.slot.split("/")[1], v, d) for t, v, d in zip(held_tasks, p.held, held_done)]
         first = next(d.report for d, pt in zip(grid_done, points) if pt.used)
-        draft = _draft(p, file, spec, points, held, fitted_names(p, points, grid_done), first, scene)
+        draft = _draft(p, file, spec, points, held, fitted_names(p, points, grid_done), first, scene
+                       ).model_copy(update={"colours": colours})
         draft = draft.model_copy(update={"outputs": choose_scales(draft.outputs, lambda o: grid_of(draft, o))})
         if spec.continuation:
             draft = draft.model_copy(update={"points": continue_points(p, registry, runner, draft)})
@@ -110,12 +141,13 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
         renders, seconds = checks_account(folder, table)
         final = table.points  # after continuation and the cliffs
         refit_renders, refit_seconds = refits_account(folder, final)
+        colour_renders, colour_seconds = refits_account(folder, colours, "colours")
         table = table.model_copy(update={"build": BuildRecord(
             points=len(final), used=sum(pt.used for pt in final),
             flagged=sum(pt.verdict in ("unreliable", "failed") for pt in final),
             left_out=sum(not pt.used for pt in final), holdout=len(held),
-            renders=sum(pt.renders for pt in firsts + held) + renders + refit_renders,
-            seconds=sum(pt.seconds for pt in firsts + held) + seconds + refit_seconds,
+            renders=sum(pt.renders for pt in firsts + held + first_colours) + renders + refit_renders + colour_renders,
+            seconds=sum(pt.seconds for pt in firsts + held + first_colours) + seconds + refit_seconds + colour_seconds,
             wall_seconds=time.perf_counter() - t0, ran_in=workers.where)})
         write_table(folder / "table.json", table)
         write_points_csv(folder / "points.csv", table)
@@ -215,9 +247,10 @@ def choose(candidates: dict[str, Candidate]) -> tuple[str, str]:
     return best, f"no held-out materials: least cross-validated error on the grid ({cv(best):.4f} of the range)"
 
 
-def _preference(c: Candidate) -> tuple[int, int]:
-    """Among maps that do equally well: the smoother kind, then the colour read channel by channel."""
-    return PREFERENCE.index(c.method), c.channels != "weighted"
+def _preference(c: Candidate) -> tuple[int, bool, bool]:
+    """Among maps that do equally well: the smoother kind, then the colour read channel by channel,
+    then the map without a correction."""
+    return PREFERENCE.index(c.method), c.channels != "weighted", c.correction is not None
 
 
 def write_points_csv(path: Path, table: Table) -> Path:

@@ -90,7 +90,8 @@ class DenseMap:
         return assemble(outputs,
                         lambda o: [_decode(o, at(c).interpolate(self.luts[o.label])) for c in range(3)],
                         lambda o: _decode(o, at(None).interpolate(self.luts[o.label])),
-                        layout.channel_weights(values, np.float32) if self.tmap.weighted else None)
+                        layout.channel_weights(values, np.float32) if self.tmap.weighted else None,
+                        self.tmap.corrector(values, np.float32))
 
 
 def _decode(output, t: np.ndarray) -> np.ndarray:

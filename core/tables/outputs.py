@@ -88,8 +88,10 @@ def _channels(p: ParamSpec, separable: bool, **common) -> list[Output]:
     return [Output(kind="scalar", **common)]
 
 
-def target_value(params: dict[str, Any] | None, error: float | None, output: Output) -> float:
-    """A fit's value of one output, on the output's unit scale (NaN where the fit has none)."""
+def target_value(params: dict[str, Any] | None, error: float | None, output: Output,
+                 channel: int | None = None) -> float:
+    """A fit's value of one output, on the output's unit scale (NaN where the fit has none); an RGB
+    output's own channel, else ``channel``, else the mean of the three."""
     if params is None:
         return math.nan
     if output.kind == "error":
@@ -103,31 +105,41 @@ def target_value(params: dict[str, Any] | None, error: float | None, output: Out
         if v is None:
             return math.nan
     if output.kind == "rgb":
-        v = float(np.mean(v)) if output.channel is None else float(np.asarray(v)[output.channel])
+        c = output.channel if output.channel is not None else channel
+        v = float(np.mean(v)) if c is None else float(np.asarray(v)[c])
     return float(output.to_unit(v))
 
 
 def assemble(outputs: list[Output], each_channel: Callable[[Output], Sequence[np.ndarray]],
-             at_mean: Callable[[Output], np.ndarray], weights: np.ndarray | None) -> dict[str, np.ndarray]:
+             at_mean: Callable[[Output], np.ndarray], weights: np.ndarray | None,
+             correct: Callable[[dict, dict], dict] | None = None, finished: bool = True) -> dict[str, np.ndarray]:
     """Target values from an output's lookups at each channel's grey level (``each_channel``: three
     arrays of N, red first)
     and at the mean grey level (``at_mean``: N), whichever it needs: an RGB parameter mapped channel
     by channel takes the first; one channel of a target colour that is not separable the second; a
     scalar the channels share the first averaged with ``weights`` (N x 3, `Layout.channel_weights`),
-    or the second where there are none. Then `finish`."""
+    or the second where there are none. Then ``correct`` (the coloured points' correction, on the
+    outputs' own quantities, given also each shared output's lookups at each channel's grey level),
+    and `finish` unless not ``finished``."""
     out: dict[str, np.ndarray] = {}
     chans: dict[str, list] = {}
+    spread: dict[str, Sequence[np.ndarray]] = {}
     for o in outputs:
         if o.per_channel:
             out[o.param] = np.stack(each_channel(o), axis=-1)
         elif o.channel is not None:
             chans.setdefault(o.param, [None] * 3)[o.channel] = at_mean(o)
-        elif weights is None:
-            out[o.param] = at_mean(o)
-        else:  # no N x 3 array in between: a texture's millions of texels
-            out[o.param] = sum(weights[:, c] * v for c, v in enumerate(each_channel(o)))
+        else:
+            if weights is not None or (correct is not None and o.kind != "error"):
+                spread[o.param] = each_channel(o)
+            if weights is None:
+                out[o.param] = at_mean(o)
+            else:  # no N x 3 array in between: a texture's millions of texels
+                out[o.param] = sum(weights[:, c] * v for c, v in enumerate(spread[o.param]))
     out.update({k: np.stack(v, axis=-1) for k, v in chans.items()})
-    return finish(outputs, out)
+    if correct is not None:
+        out = correct(out, spread)
+    return finish(outputs, out) if finished else out
 
 
 def finish(outputs: list[Output], values: dict[str, np.ndarray]) -> dict[str, np.ndarray]:

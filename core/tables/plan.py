@@ -18,6 +18,10 @@ QUESTIONED = frozenset({"not_at_minimum", "cannot_resolve", "image_precision", "
 """Findings that put the fit itself in question (it may not be the best this target does): such a
 point is left out of the regression. A mismatch, a held-out light over the threshold, a bound the
 fit presses on, parameters that trade off: the fit is still the closest the target gets, and kept."""
+COLOUR_SEED = 7919
+"""The coloured points' draw: the held-out draw's seed plus this (another Sobol' scrambling)."""
+
+
 @dataclass
 class Plan:
     """A spec checked against the installed adapters: its layout and the jobs of its points."""
@@ -30,6 +34,7 @@ class Plan:
     source_params: dict
     grid: list[tuple[tuple[int, ...], dict]]
     held: list[dict]
+    colours: list[dict]
 
 
 def plan(spec: TableSpec, file: str, registry: AdapterRegistry) -> Plan:
@@ -48,8 +53,12 @@ def plan(spec: TableSpec, file: str, registry: AdapterRegistry) -> Plan:
                               f"follow a choice: hold it (target.fix.{p.name}: one of {', '.join(p.choices)})",
                               file=file, field="target.fix")
     layout = Layout(spec.axes, kinds)
+    if spec.colours and len(layout.grey_axes) != 1:
+        raise ConfigError(f"coloured points correct a map over one RGB axis sampled as grey levels, and this spec has "
+                          f"{len(layout.grey_axes)}: set colours to 0, or give one RGB axis with mode: scale",
+                          file=file, field="colours")
     return Plan(spec, file, layout, src, tgt, {k: v for k, v in params.items() if k not in spec.axes},
-                layout.grid(), layout.draw(spec.holdout, spec.seed))
+                layout.grid(), layout.draw(spec.holdout, spec.seed), layout.draw(spec.colours, spec.seed + COLOUR_SEED))
 
 
 def _axis_kind(src: ModelSpec, name: str, ax, params: dict, file: str) -> str:

@@ -20,16 +20,17 @@ stopped short of a minimum of the full image is fitted again by scheme three, ev
 the full image). The refit replaces the first fit where it ends lower."""
 
 
-def remedy_points(p: Plan, registry: AdapterRegistry, runner: Runner, scene, points: list[PointRecord]
-                  ) -> list[PointRecord]:
-    """Each grid point whose fit is in question for a reason with a remedy (`REMEDIES`) fitted again
-    with it, stored as `points/<id>/remedy/`; the refit's record replaces the first where its error
-    is lower (and says so), whatever its own findings say (they decide whether the map uses it)."""
+def remedy_points(p: Plan, registry: AdapterRegistry, runner: Runner, scene, points: list[PointRecord],
+                  folder: str = "points") -> list[PointRecord]:
+    """Each point (grid or coloured) whose fit is in question for a reason with a remedy (`REMEDIES`)
+    fitted again with it, stored as `<folder>/<id>/remedy/`; the refit's record replaces the first
+    where its error is lower (and says so), whatever its own findings say (they decide whether the
+    map uses it)."""
     tasks, which = [], []
     for i, pt in enumerate(points):
         update = _remedy(pt, p.spec.options)
         if update:
-            tasks.append(point_task(p, registry, f"points/{pt.id}/remedy", pt.values, f"{pt.id} remedy "
+            tasks.append(point_task(p, registry, f"{folder}/{pt.id}/remedy", pt.values, f"{pt.id} remedy "
                                     + " ".join(f"{k}={v}" for k, v in update.items()), scene,
                                     p.spec.options.model_copy(update=update)))
             which.append((i, ", ".join(f"{k} {v}" for k, v in update.items())))
@@ -128,15 +129,16 @@ def leave_out_cliffs(draft: Table) -> list[PointRecord]:
     return points
 
 
-def refits_account(folder: Path, points: list[PointRecord]) -> tuple[int, float]:
-    """Target renders and seconds of the refits stored (remedies and continuation, kept or not)."""
+def refits_account(folder: Path, points: list[PointRecord], under: str = "points") -> tuple[int, float]:
+    """Target renders and seconds of the refits stored under ``under`` (remedies and continuation,
+    kept or not)."""
     from ..report import read_report
 
     renders, seconds = 0, 0.0
     for pt in points:
         for refit in ("remedy", "continued"):
             try:
-                r = read_report(folder / "points" / pt.id / refit / "result.json")
+                r = read_report(folder / under / pt.id / refit / "result.json")
             except ConfigError:
                 continue
             renders, seconds = renders + r.renders, seconds + r.seconds

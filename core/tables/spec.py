@@ -88,6 +88,14 @@ class TableSpec(Strict):
                                                         "(colours not grey), fitted directly, on which the "
                                                         "candidate maps are compared by image error; 0: by "
                                                         "cross-validation of the grid's parameters alone.")
+    colours: int = Field(0, ge=0, le=MAX_POINTS, description="Source materials of every colour drawn at random "
+                                                             "inside the ranges (as the held-out ones, another draw) "
+                                                             "and fitted, to correct the map where the target couples "
+                                                             "a colour's channels, which a grey grid cannot show (a "
+                                                             "dielectric's diffuse pinned at 1 in its bright channel "
+                                                             "lowers its IOR for all three). Each map is then tried "
+                                                             "with the correction and without. Needs one RGB axis "
+                                                             "sampled as grey levels.")
     seed: int = Field(0, ge=0, le=2**31 - 1, description="Seed of the held-out draw.")
     continuation: bool = Field(False, description="Refit each grid point once more, from one start: what a smooth "
                                                   "map of the other points' fits gives there; the refit replaces the "

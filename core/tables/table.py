@@ -17,13 +17,16 @@ from ..configio import validation_message
 from ..errors import ConfigError
 from ..model import Strict, WithDerived
 from ..scene import ProbeScene
+from .colours import Polynomial, Rows, correction_columns, corrected, gaps
 from .maps import Grid, Regressor, build
 from .outputs import ERROR, Output, assemble, target_value
 from .spec import Layout, TableSpec
 
-TABLE_SCHEMA_VERSION = 2
+TABLE_SCHEMA_VERSION = 3
 """2: an output the channels share is looked up at each channel's grey level and weighted (was: at the
-mean grey level); a table of 1 is built again into its folder, which reuses its fits."""
+mean grey level); a table of 1 is built again into its folder, which reuses its fits. 3: coloured
+points and maps corrected by them (`colours`); a table of 2 has neither and is read as it is."""
+READS = (2, 3)
 
 
 class PointRecord(Strict):
@@ -69,6 +72,12 @@ class Candidate(Strict):
                                                                          "over its direct fit's.")
     median_ratio: float | None = None
     p95_ratio: float | None = None
+    correction: dict[str, int] | None = Field(
+        None, description="Per output: the degree of the polynomial that corrects the map where a colour's channels "
+                          "couple, fitted to what it misses at the coloured points (`colours`); None: uncorrected.")
+    correction_cv: dict[str, list[float]] = Field(
+        default_factory=dict, description="Per output: cross-validated RMS of what the map misses at the grid's and "
+                                          "the coloured points, uncorrected and corrected (a fraction of the range).")
 
 
 class BuildRecord(Strict):
@@ -104,6 +113,8 @@ class Table(WithDerived):
     outputs: list[Output]
     points: list[PointRecord]
     holdout: list[PointRecord]
+    colours: list[PointRecord] = Field(default_factory=list, description="The coloured points' fits (`spec.colours`), "
+                                                                          "from which maps are corrected.")
     candidates: dict[str, Candidate]
     chosen: str = Field(description="The candidate map lookups use (a key of candidates).")
     chosen_why: str
@@ -116,7 +127,13 @@ class Table(WithDerived):
         same table rebuilt gives the same digest, and lookups stored with it stay valid."""
         timing = {"seconds", "renders"}
         doc = self.model_dump(mode="json", exclude={"digest": True, "build": True, "tool": True,
-                                                    "points": {"__all__": timing}, "holdout": {"__all__": timing}})
+                                                    "points": {"__all__": timing}, "holdout": {"__all__": timing},
+                                                    "colours": {"__all__": timing}})
+        if not doc["colours"]:  # format 2 had none: its tables keep their digests
+            del doc["colours"], doc["spec"]["colours"]
+        for c in doc["candidates"].values():
+            if c["correction"] is None:
+                del c["correction"], c["correction_cv"]
         return hashlib.sha256(json.dumps(doc, sort_keys=True, ensure_ascii=False).encode()).hexdigest()
 
     @property
@@ -148,13 +165,43 @@ class TableMap:
         self.weighted = c.channels == "weighted"
         self.regressors: dict[str, Regressor] = {o.label: build(c.method, grid_of(table, o), c.hyper.get(o.label))
                                                  for o in table.outputs}
+        self.corrections: dict[str, Polynomial] = {}
+        if c.correction:
+            self.corrections = {o.label: Polynomial(correction_rows(table, self, o), c.correction[o.label])
+                                for o in table.outputs if o.label in c.correction}
 
-    def predict(self, values: dict[str, Any]) -> dict[str, np.ndarray]:
+    def corrector(self, values: dict[str, np.ndarray], dtype=np.float64):
+        """The correction of assembled values at these source values (None: this map has none)."""
+        if not self.corrections:
+            return None
+        return lambda assembled, spread: corrected(self.table.outputs, self.corrections, self.table.layout, values,
+                                                   assembled, spread, dtype)
+
+    def predict(self, values: dict[str, Any], *, finished: bool = True) -> dict[str, np.ndarray]:
         """Target values (N, or N x 3 for RGB) for source axis values (N, or N x 3; or a single
-        material's scalars and triples, giving N = 1), clamped to the grid's range."""
+        material's scalars and triples, giving N = 1), clamped to the grid's range; as the map's
+        outputs (a conductor's reflectivity and edge tint) when not ``finished``."""
+        arr = self._arrays(values)
+        return self._assemble(arr, self.corrector(arr), finished)
+
+    def uncorrected(self, values: dict[str, Any]) -> tuple[dict[str, np.ndarray], dict]:
+        """The map's outputs without the coloured points' correction, and each shared output's
+        lookups at each channel's grey level (what the correction is given)."""
+        kept: dict = {}
+
+        def keep(assembled: dict, spread: dict) -> dict:
+            kept.update(spread)
+            return assembled
+
+        return self._assemble(self._arrays(values), keep, False), kept
+
+    def _arrays(self, values: dict[str, Any]) -> dict[str, np.ndarray]:
         layout = self.table.layout
         arr = {k: np.asarray(values[k], np.float64) for k in self.table.spec.axes}
-        arr = {k: (v.reshape(-1, 3) if layout.kinds[k] == "rgb" else v.reshape(-1)) for k, v in arr.items()}
+        return {k: (v.reshape(-1, 3) if layout.kinds[k] == "rgb" else v.reshape(-1)) for k, v in arr.items()}
+
+    def _assemble(self, arr: dict[str, np.ndarray], correct, finished: bool) -> dict[str, np.ndarray]:
+        layout = self.table.layout
         features: dict[int | None, np.ndarray] = {}
 
         def at(channel: int | None) -> np.ndarray:  # each channel's coordinates, computed once
@@ -168,7 +215,7 @@ class TableMap:
 
         return assemble(self.table.outputs, each_channel,
                         lambda o: o.from_unit(self.regressors[o.label].predict(at(None))),
-                        layout.channel_weights(arr) if self.weighted else None)
+                        layout.channel_weights(arr) if self.weighted else None, correct, finished)
 
     def params(self, values: dict[str, Any]) -> tuple[dict[str, Any], float]:
         """One material's complete target parameters and the error a direct fit reaches there."""
@@ -178,6 +225,25 @@ class TableMap:
             if k != ERROR:
                 params[k] = [float(x) for x in v[0]] if v.ndim == 2 else float(v[0])
         return params, float(pred[ERROR][0])
+
+
+def correction_rows(table: Table, tmap: TableMap, output: Output) -> Rows:
+    """What the uncorrected map misses of a per-channel output at the used grid and coloured points
+    (unit scale), a row per channel, with the correction's inputs and gaps there."""
+    pts = [p for p in table.points + table.colours if p.used]
+    vals = {name: np.array([p.values[name] for p in pts], np.float64) for name in table.spec.axes}
+    pred, spread = tmap.uncorrected(vals)
+    gap = gaps(table.outputs, pred, spread)
+    xs, gs, ys, ids = [], [], [], []
+    for c in range(3):
+        y = np.array([target_value(p.params, p.error, output, channel=c) for p in pts])
+        miss = y - output.to_unit(pred[output.param][:, c])
+        ok = np.isfinite(miss)
+        xs.append(correction_columns(table.layout, vals, c)[ok])
+        gs.append(gap[ok, c])
+        ys.append(miss[ok])
+        ids.append(np.flatnonzero(ok))
+    return Rows(np.concatenate(xs), np.concatenate(gs), np.concatenate(ys), np.concatenate(ids))
 
 
 def outside(table: Table, values: dict[str, Any]) -> list[str]:
@@ -223,9 +289,10 @@ def read_table(path: str | Path) -> Table:
         raise ConfigError(f"cannot read it as JSON: {exc}", file=str(p)) from None
     if not isinstance(doc, dict) or "chosen" not in doc or not isinstance(doc.get("schema_version"), int):
         raise ConfigError("not a remap table (build one with `remap table build SPEC.yaml --out DIR`)", file=str(p))
-    if doc["schema_version"] != TABLE_SCHEMA_VERSION:
+    if doc["schema_version"] not in READS:
         newer = doc["schema_version"] > TABLE_SCHEMA_VERSION
-        raise ConfigError(f"table format {doc['schema_version']}; this brdf-remap reads {TABLE_SCHEMA_VERSION}: "
+        raise ConfigError(f"table format {doc['schema_version']}; this brdf-remap reads "
+                          f"{' and '.join(map(str, READS))}: "
                           + ("upgrade brdf-remap" if newer else "build it again with `remap table build` into its "
                                                                 "folder (its stored fits are reused)"), file=str(p))
     try:

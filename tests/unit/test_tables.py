@@ -213,7 +213,7 @@ def test_a_table_file_is_versioned_and_an_edited_one_refused(tmp_path):
     path.write_text(json.dumps(doc))
     with pytest.raises(ConfigError, match="upgrade brdf-remap"):
         read_table(path)
-    doc["schema_version"] = TABLE_SCHEMA_VERSION - 1  # its map read otherwise: built again, its fits reused
+    doc["schema_version"] = 1  # its map read otherwise: built again, its fits reused
     path.write_text(json.dumps(doc))
     with pytest.raises(ConfigError, match=r"build it again .*\(its stored fits are reused\)"):
         read_table(path)
@@ -327,3 +327,63 @@ def test_each_output_takes_the_scale_that_predicts_it_better(tmp_path):
     table = table.model_copy(update={"outputs": linear})
     chosen = {o.param: o.scale for o in choose_scales(table.outputs, lambda o: grid_of(table, o))}
     assert chosen["alpha"] == "log" and chosen["error"] == "log"
+
+
+def _coupled(values):
+    """A target that couples the channels as a rough plastic does: one alpha for the three channels,
+    the bright channels' (each channel alone would take 1.1 x alpha x (1 + c / 2); the colour takes
+    those averaged with weights c²), and each channel's reflectance making up for the alpha it is
+    given instead of its own. On grey: the synthetic table's reflectance, 0.9 x the source's."""
+    c = np.asarray(values["specular_reflectance"], float)
+    own = 1.1 * values["alpha"] * (1 + c / 2)
+    shared = float((own * c ** 2).sum() / (c ** 2).sum())
+    return {"variant": "balanced", "ensure_energy_conservation": "true", "diffuse_reflectance": [0, 0, 0],
+            "specular_reflectance": list(0.9 * c * (1 + 2 * np.log(shared / own))), "alpha": shared}
+
+
+def test_coloured_points_correct_a_map_where_the_target_couples_the_channels(tmp_path):
+    """A grey grid cannot show how a target couples a colour's channels; coloured points fitted beside
+    it correct the map (a lookup and texel by texel alike), where a channel is given a shared
+    parameter off its own; a table without them keeps its digest."""
+    from brdfremap.core.tables.build import fit_candidates
+    from brdfremap.core.tables.dense import DenseMap
+    from brdfremap.core.tables.table import PointRecord
+
+    table = synthetic_table(tmp_path)
+    points = [pt.model_copy(update={"used": True, "params": _coupled(pt.values)}) for pt in table.points]
+    drawn = table.layout.draw(64, 5)
+    colours = [PointRecord(id=f"c{i}", values=v, params=_coupled(v), error=0.02, verdict="ok", used=True)
+               for i, v in enumerate(drawn)]
+    colours[3] = colours[3].model_copy(update={"params": {**colours[3].params, "specular_reflectance": [
+        0.05, 0.05, 0.05]}})  # another optimum
+    plain = table.model_copy(update={"points": points})
+    table = plain.model_copy(update={"colours": colours})
+    table = table.model_copy(update={"candidates": fit_candidates(table)})
+    assert "multilinear+colours" in table.candidates and "rbf-mean+colours" in table.candidates
+    c = table.candidates["multilinear+colours"]
+    assert list(c.correction) == ["specular_reflectance"]  # alpha is shared: the bright channels'
+    assert all(after < before for before, after in c.correction_cv.values())
+    tests = table.layout.draw(40, 99)
+    want = np.array([_coupled(v)["specular_reflectance"] for v in tests])
+    values = {"alpha": np.array([v["alpha"] for v in tests]),
+              "specular_reflectance": np.array([v["specular_reflectance"] for v in tests])}
+    texels = {k: v.astype(np.float32) for k, v in values.items()}
+    plain_map, fixed_map = TableMap(table, "multilinear"), TableMap(table, "multilinear+colours")
+    before = np.abs(plain_map.predict(values)["specular_reflectance"] - want).max()
+    got = fixed_map.predict(values)["specular_reflectance"]
+    assert np.abs(got - want).max() < 0.2 * before
+    dense = DenseMap(fixed_map).predict(texels)["specular_reflectance"]
+    assert np.abs(dense - got).max() < 1e-3  # texel by texel: the same correction
+    assert all(c.correction is None for c in fit_candidates(plain).values())  # no coloured points, no correction
+    reread = read_table(write_table(tmp_path / "coloured.json", table))
+    assert reread.digest == table.digest and reread.colours == table.colours
+
+
+def test_coloured_points_need_one_grey_axis(tmp_path):
+    doc = json.loads(json.dumps(SPEC))
+    doc["axes"]["specular_reflectance"]["mode"] = "channels"
+    doc["colours"] = 8
+    path = tmp_path / "spec.yaml"
+    path.write_text(yaml.safe_dump(doc))
+    with pytest.raises(ConfigError, match="colours: coloured points correct a map over one RGB axis"):
+        plan(load_table_spec(path), str(path), collect_adapters())

@@ -1,0 +1,152 @@
+"""A correction of a separable map where a colour's channels couple (`TableSpec.colours`).
+
+Under a grey `scale` axis a table maps each channel as if it alone made its image (the JCGT paper's
+separable form), and reads a scalar the channels share at each channel's grey level
+(`Layout.channel_weights`). Where the target couples its channels, a grey grid cannot tell how: a
+Mitsuba rough plastic whose bright channel's diffuse reflectance is pinned at 1 lowers its IOR for
+all three channels, and the dim channels' diffuse then makes up for it. A table with coloured
+points (source materials of every colour, drawn at random and fitted like the grid's) learns that
+from them: per output, a polynomial of the colour's channels (for a per-channel output: its own
+channel, then the others, the brighter first; for a shared one: the channels from the brightest)
+and of the other axes, fitted to what the separable map misses at the coloured points and at the
+grid's (grey needs no correction: there it misses about nothing). Its degree is chosen by
+cross-validation over the points; a point it misses by far (a fit in another optimum) is left out
+of it."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .maps import folds, monomials
+from .outputs import Output
+from .spec import Layout
+
+DEGREES = (0, 1, 2)
+RIDGE = 1e-6
+"""Added to the normal equations' diagonal, per row (the design's columns are products of unit coordinates)."""
+HUBER, ROUNDS = 1.345, 20
+"""The fit is robust (Huber's weights, this many robust standard deviations; iteratively reweighted,
+this many rounds): a point whose fit found another optimum pulls it little."""
+
+
+def shared_outputs(outputs: list[Output]) -> list[Output]:
+    """The target parameters the channels share (a roughness, an IOR)."""
+    return [o for o in outputs if o.kind != "error" and not o.per_channel and o.channel is None]
+
+
+def gaps(outputs: list[Output], values: dict[str, np.ndarray], spread: dict) -> np.ndarray:
+    """N x 3 x k: how far each shared output's value is from its lookup at each channel's grey level
+    (unit scale): what a channel must make up for, where the bright channels set a shared parameter."""
+    cols = [o.to_unit(values[o.param])[:, None] - np.stack([o.to_unit(v) for v in spread[o.param]], axis=-1)
+            for o in shared_outputs(outputs)]
+    return np.stack(cols, axis=-1) if cols else np.zeros((len(next(iter(values.values()))), 3, 0))
+
+
+def correction_columns(layout: Layout, values: dict[str, np.ndarray], channel: int, dtype=np.float64
+                       ) -> np.ndarray:
+    """N x dims: what the correction of ``channel`` depends on besides the gaps: the other axes as
+    the map reads them, the channel's own value and the others' (the brighter first)."""
+    grey = layout.grey_axes[0]
+    cols = [col for d, col in zip(layout.dims, layout.columns(values, 0, dtype)) if d.axis != grey]
+    u = layout.axes[grey].to_unit(np.asarray(values[grey]), dtype)
+    others = np.delete(u, channel, axis=-1)
+    cols += [u[..., channel], others.max(axis=-1), others.min(axis=-1)]
+    return np.clip(np.stack(cols, axis=-1), dtype(0.0), dtype(1.0))
+
+
+@dataclass
+class Rows:
+    """Training data of one output's correction: inputs (`correction_columns`), gaps (`gaps` at the
+    row's channel), what the separable map misses (unit scale), and the point each row comes from."""
+
+    x: np.ndarray
+    gap: np.ndarray
+    y: np.ndarray
+    point: np.ndarray
+
+    def take(self, keep: np.ndarray) -> "Rows":
+        return Rows(self.x[keep], self.gap[keep], self.y[keep], self.point[keep])
+
+
+class Polynomial:
+    """The correction: each gap times a polynomial of total degree ``degree`` in the inputs (so it
+    vanishes where no shared parameter is moved off a channel's own: on grey, and wherever the map
+    alone holds), fitted by least squares with a ridge (`RIDGE`), robustly (`HUBER`)."""
+
+    def __init__(self, rows: Rows, degree: int):
+        self.terms = np.array(monomials(rows.x.shape[1], degree))
+        a = self.design(rows.x, rows.gap)
+        moved = np.abs(rows.gap).max(axis=1, initial=0.0) > 1e-6  # the rows the correction can reach
+        w = np.ones(len(rows.y))
+        for _ in range(ROUNDS):
+            self.coef = self._solve(a, rows.y, w)
+            miss = np.abs(rows.y - a @ self.coef)
+            scale = max(1.4826 * float(np.median(miss[moved])) if moved.any() else 0.0, 1e-6)
+            w = np.minimum(1.0, HUBER * scale / np.maximum(miss, 1e-12))
+
+    @staticmethod
+    def _solve(a: np.ndarray, y: np.ndarray, w: np.ndarray) -> np.ndarray:
+        aw = a * w[:, None]
+        return np.linalg.solve(aw.T @ a + RIDGE * len(y) * np.eye(a.shape[1]), aw.T @ y)
+
+    def design(self, x: np.ndarray, gap: np.ndarray) -> np.ndarray:
+        x = np.asarray(x)
+        powers = [np.ones_like(x)]
+        for _ in range(int(self.terms.max(initial=0))):
+            powers.append(powers[-1] * x)
+        cols = []
+        for e in self.terms:
+            col = np.ones(len(x), x.dtype)
+            for d, k in enumerate(e):
+                if k:
+                    col = col * powers[k][:, d]
+            cols += [col * gap[:, j].astype(x.dtype) for j in range(gap.shape[1])]
+        return np.stack(cols, axis=1)
+
+    def predict(self, x: np.ndarray, gap: np.ndarray) -> np.ndarray:
+        return self.design(x, gap) @ self.coef.astype(np.asarray(x).dtype)
+
+
+def cv_miss(rows: Rows, degree: int | None) -> float:
+    """Cross-validated mean absolute miss of the corrected map, by folds over points (None:
+    uncorrected); the mean absolute, since a few fits in another optimum are no one's to follow."""
+    if degree is None:
+        return float(np.mean(np.abs(rows.y)))
+    points = np.unique(rows.point)
+    pred = np.full(len(rows.y), np.nan)
+    for test in folds(len(points)):
+        held = np.isin(rows.point, points[test])
+        pred[held] = Polynomial(rows.take(~held), degree).predict(rows.x[held], rows.gap[held])
+    return float(np.mean(np.abs(pred - rows.y)))
+
+
+def choose_degree(rows: Rows) -> tuple[int, float, float]:
+    """The degree with the least cross-validated miss; that miss, and the uncorrected map's."""
+    scored = [(cv_miss(rows, d), d) for d in DEGREES]
+    err, degree = min(scored)
+    return degree, err, cv_miss(rows, None)
+
+
+def corrected(outputs: list[Output], polynomials: dict[str, Polynomial], layout: Layout,
+              source: dict[str, np.ndarray], values: dict[str, np.ndarray], spread: dict, dtype=np.float64
+              ) -> dict[str, np.ndarray]:
+    """Assembled target values (`outputs.assemble`, before `finish`) with each per-channel output's
+    correction added on its unit scale (and kept within its bounds), at these ``source`` axis values."""
+    out = dict(values)
+    gap = gaps(outputs, values, spread)
+    for o in outputs:
+        poly = polynomials.get(o.label)
+        if poly is None:
+            continue
+        v = np.array(out[o.param], copy=True)
+        for c in range(3):
+            step = poly.predict(correction_columns(layout, source, c, dtype), gap[:, c])
+            v[..., c] = o.from_unit(o.to_unit(v[..., c]) + step, v.dtype.type)
+        out[o.param] = v
+    return out
+
+
+__all__ = ["corrected", "Polynomial", "Rows", "choose_degree", "correction_columns", "gaps"]
