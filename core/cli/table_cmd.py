@@ -77,8 +77,10 @@ def _summary(t) -> None:
           + (f"; {continued} continued from their neighbours" if t.spec.continuation else ""))
     if t.colours:
         used = sum(pt.used for pt in t.colours)
+        took = sum(c.correction is not None for c in t.candidates.values())
         print(f"colours        {len(t.colours)} coloured points fitted, {used} usable, to correct the maps where the "
-              "target couples a colour's channels (+colours: a map with that correction)")
+              "target couples a colour's channels (+colours: a map with that correction; "
+              + (f"{took} maps took one)" if took else "no map gained by one)"))
     print(f"cost           {b.renders} target renders, {b.seconds:.0f} s of fits; this build {b.wall_seconds:.1f} s "
           f"in {b.ran_in}")
     print("maps           held-out lookup error / direct fit error; cross-validated error on the grid (a fraction "
@@ -94,8 +96,8 @@ def _summary(t) -> None:
                 else "no held-out lookups")
         cv = ", ".join(f"{k} " + ("–" if v is None else f"{v:.3f}") for k, v in c.cv_rms.items() if k != "error")
         if c.correction_cv:
-            cv += "; corrected " + ", ".join(f"{k} {before:.3f}->{after:.3f}" for k, (before, after)
-                                             in c.correction_cv.items() if k != "error")
+            cv += "; coloured points' mean miss " + ", ".join(f"{k} {before:.3f}->{after:.3f}" for k, (before, after)
+                                                           in c.correction_cv.items())
         mark = "*" if m == t.chosen else " "
         print(f"  {mark} {m:<24} {held}; {cv}")
     print(f"chosen         {t.chosen}: {t.chosen_why}")

@@ -25,7 +25,7 @@ from ..job import Lookup
 from ..plugins import AdapterRegistry
 from ..runner import Done, Runner
 from ..store import Store, owned
-from .colours import choose_degree
+from .colours import choose_degree, shared_outputs
 from .maps import METHODS, build, choose_hyperparameter
 from .outputs import choose_scales, outputs_for
 from .plan import Plan, fitted_names, plan, point_task, record, shown
@@ -70,8 +70,11 @@ def fit_candidates(draft: Table) -> dict[str, Candidate]:
 
 
 def corrected_candidates(draft: Table, candidates: dict[str, Candidate]) -> dict[str, Candidate]:
-    """Each map with the coloured points' correction (`colours`): per output, the polynomial degree
-    cross-validation chooses, where it misses the points less than the map alone."""
+    """Each map with the coloured points' correction (`colours`): for each target colour mapped channel
+    by channel, the degree cross-validation chooses, where it gains (`colours.GAIN`). None without a
+    parameter the channels share (nothing moves a channel off its own lookup)."""
+    if not shared_outputs(draft.outputs):
+        return {}
     table = draft.model_copy(update={"candidates": candidates})
     out = {}
     for name, c in candidates.items():
@@ -82,8 +85,9 @@ def corrected_candidates(draft: Table, candidates: dict[str, Candidate]) -> dict
         for o in draft.outputs:
             if not o.per_channel:  # a shared parameter is the bright channels' (`Layout.channel_weights`)
                 continue
-            degree, err, before = choose_degree(correction_rows(table, tmap, o))
-            if err < before:
+            chosen = choose_degree(correction_rows(table, tmap, o))
+            if chosen is not None:
+                degree, err, before = chosen
                 degrees[o.label], cv[o.label] = degree, [before, err]
         if degrees:
             out[f"{name}+colours"] = c.model_copy(update={"correction": degrees, "correction_cv": cv})
@@ -106,7 +110,7 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
     held_tasks = [point_task(p, registry, f"holdout/h{i:03d}", v, f"h{i:03d} {shown(v)}", scene, spec.options)
                   for i, v in enumerate(p.held)]
     colour_tasks = [point_task(p, registry, f"colours/c{i:04d}", v, f"c{i:04d} {shown(v)}", scene, spec.options)
-                    for i, v in enumerate(p.colours)]
+                    for i, v in enumerate(p.colours)]  # their fits after the grid's: a rerun resumes the grid first
     with owned(out) as folder:
         runner = Runner(Store(folder), workers, renderer_files=tuple(registry.loaded_files()), quiet=quiet,
                         stop_on_error=False, line=_line)

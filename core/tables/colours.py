@@ -6,12 +6,13 @@ separable form), and reads a scalar the channels share at each channel's grey le
 Mitsuba rough plastic whose bright channel's diffuse reflectance is pinned at 1 lowers its IOR for
 all three channels, and the dim channels' diffuse then makes up for it. A table with coloured
 points (source materials of every colour, drawn at random and fitted like the grid's) learns that
-from them: per output, a polynomial of the colour's channels (for a per-channel output: its own
-channel, then the others, the brighter first; for a shared one: the channels from the brightest)
-and of the other axes, fitted to what the separable map misses at the coloured points and at the
-grid's (grey needs no correction: there it misses about nothing). Its degree is chosen by
-cross-validation over the points; a point it misses by far (a fit in another optimum) is left out
-of it."""
+from them, for each target colour mapped channel by channel: what the map misses at a channel is
+taken as the sum over the shared parameters of the channel's *gap* (how far the shared parameter the
+map gives is from the channel's own lookup of it, `gaps`) times a polynomial in the other axes and
+the colour's channels (its own, then the others, the brighter first). A gap of zero asks for no
+correction: on grey, and wherever the channels agree, the map is left as it is. Its degree is
+chosen by cross-validation over the points; the fit is robust (Huber's weights), so a point whose
+fit found another optimum pulls it little. The shared parameters themselves are not corrected."""
 
 from __future__ import annotations
 
@@ -26,7 +27,10 @@ from .spec import Layout
 
 DEGREES = (0, 1, 2)
 RIDGE = 1e-6
-"""Added to the normal equations' diagonal, per row (the design's columns are products of unit coordinates)."""
+"""Added to the normal equations' diagonal, as a fraction of its mean (the gaps scale the columns)."""
+GAIN = 0.97
+"""A correction is kept where its cross-validated miss at the moved rows is at most this much of the
+map's alone (the least of three degrees' scores is biased low)."""
 HUBER, ROUNDS = 1.345, 20
 """The fit is robust (Huber's weights, this many robust standard deviations; iteratively reweighted,
 this many rounds): a point whose fit found another optimum pulls it little."""
@@ -70,6 +74,11 @@ class Rows:
     def take(self, keep: np.ndarray) -> "Rows":
         return Rows(self.x[keep], self.gap[keep], self.y[keep], self.point[keep])
 
+    @property
+    def moved(self) -> np.ndarray:
+        """The rows whose channel is given a shared parameter off its own (the rows a correction can reach)."""
+        return np.abs(self.gap).max(axis=1, initial=0.0) > 1e-6
+
 
 class Polynomial:
     """The correction: each gap times a polynomial of total degree ``degree`` in the inputs (so it
@@ -79,7 +88,7 @@ class Polynomial:
     def __init__(self, rows: Rows, degree: int):
         self.terms = np.array(monomials(rows.x.shape[1], degree))
         a = self.design(rows.x, rows.gap)
-        moved = np.abs(rows.gap).max(axis=1, initial=0.0) > 1e-6  # the rows the correction can reach
+        moved = rows.moved
         w = np.ones(len(rows.y))
         for _ in range(ROUNDS):
             self.coef = self._solve(a, rows.y, w)
@@ -89,8 +98,12 @@ class Polynomial:
 
     @staticmethod
     def _solve(a: np.ndarray, y: np.ndarray, w: np.ndarray) -> np.ndarray:
+        if not a.shape[1]:
+            return np.zeros(0)
         aw = a * w[:, None]
-        return np.linalg.solve(aw.T @ a + RIDGE * len(y) * np.eye(a.shape[1]), aw.T @ y)
+        lhs = aw.T @ a
+        return np.linalg.solve(lhs + RIDGE * max(float(np.trace(lhs)) / len(lhs), 1e-12) * np.eye(len(lhs)),
+                               aw.T @ y)
 
     def design(self, x: np.ndarray, gap: np.ndarray) -> np.ndarray:
         x = np.asarray(x)
@@ -104,30 +117,37 @@ class Polynomial:
                 if k:
                     col = col * powers[k][:, d]
             cols += [col * gap[:, j].astype(x.dtype) for j in range(gap.shape[1])]
-        return np.stack(cols, axis=1)
+        return np.stack(cols, axis=1) if cols else np.zeros((len(x), 0), x.dtype)
 
     def predict(self, x: np.ndarray, gap: np.ndarray) -> np.ndarray:
         return self.design(x, gap) @ self.coef.astype(np.asarray(x).dtype)
 
 
 def cv_miss(rows: Rows, degree: int | None) -> float:
-    """Cross-validated mean absolute miss of the corrected map, by folds over points (None:
-    uncorrected); the mean absolute, since a few fits in another optimum are no one's to follow."""
+    """Cross-validated mean absolute miss at the moved rows (`Rows.moved`) of the corrected map, by
+    folds over points (None: uncorrected); the mean absolute, since a few fits in another optimum are
+    no one's to follow. NaN without moved rows."""
+    moved = rows.moved
+    if not moved.any():
+        return math.nan
     if degree is None:
-        return float(np.mean(np.abs(rows.y)))
+        return float(np.mean(np.abs(rows.y[moved])))
     points = np.unique(rows.point)
     pred = np.full(len(rows.y), np.nan)
     for test in folds(len(points)):
         held = np.isin(rows.point, points[test])
         pred[held] = Polynomial(rows.take(~held), degree).predict(rows.x[held], rows.gap[held])
-    return float(np.mean(np.abs(pred - rows.y)))
+    return float(np.mean(np.abs(pred - rows.y)[moved]))
 
 
-def choose_degree(rows: Rows) -> tuple[int, float, float]:
-    """The degree with the least cross-validated miss; that miss, and the uncorrected map's."""
-    scored = [(cv_miss(rows, d), d) for d in DEGREES]
-    err, degree = min(scored)
-    return degree, err, cv_miss(rows, None)
+def choose_degree(rows: Rows) -> tuple[int, float, float] | None:
+    """The degree with the least cross-validated miss, that miss and the uncorrected map's, where it
+    gains (`GAIN`); None where it does not, or nothing is moved."""
+    before = cv_miss(rows, None)
+    if not math.isfinite(before):
+        return None
+    err, degree = min((cv_miss(rows, d), d) for d in DEGREES)
+    return (degree, err, before) if err <= GAIN * before else None
 
 
 def corrected(outputs: list[Output], polynomials: dict[str, Polynomial], layout: Layout,

@@ -53,10 +53,13 @@ def plan(spec: TableSpec, file: str, registry: AdapterRegistry) -> Plan:
                               f"follow a choice: hold it (target.fix.{p.name}: one of {', '.join(p.choices)})",
                               file=file, field="target.fix")
     layout = Layout(spec.axes, kinds)
-    if spec.colours and len(layout.grey_axes) != 1:
-        raise ConfigError(f"coloured points correct a map over one RGB axis sampled as grey levels, and this spec has "
-                          f"{len(layout.grey_axes)}: set colours to 0, or give one RGB axis with mode: scale",
-                          file=file, field="colours")
+    if spec.colours and (len(layout.grey_axes) != 1 or not layout.separable):
+        raise ConfigError(f"coloured points correct a map over one RGB axis sampled as grey levels (and none as "
+                          f"channels), and this spec has {len(layout.grey_axes)} grey: set colours to 0, or give one "
+                          "RGB axis with mode: scale", file=file, field="colours")
+    if spec.colours and not spec.holdout:
+        raise ConfigError("coloured points need held-out materials, on which a map is compared with its "
+                          "correction: give holdout (10 or more) or set colours to 0", file=file, field="colours")
     return Plan(spec, file, layout, src, tgt, {k: v for k, v in params.items() if k not in spec.axes},
                 layout.grid(), layout.draw(spec.holdout, spec.seed), layout.draw(spec.colours, spec.seed + COLOUR_SEED))
 

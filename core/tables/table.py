@@ -76,8 +76,9 @@ class Candidate(Strict):
         None, description="Per output: the degree of the polynomial that corrects the map where a colour's channels "
                           "couple, fitted to what it misses at the coloured points (`colours`); None: uncorrected.")
     correction_cv: dict[str, list[float]] = Field(
-        default_factory=dict, description="Per output: cross-validated RMS of what the map misses at the grid's and "
-                                          "the coloured points, uncorrected and corrected (a fraction of the range).")
+        default_factory=dict, description="Per corrected output: the cross-validated mean absolute miss of the map at "
+                                          "the channels a shared parameter moves off their own lookup, uncorrected "
+                                          "and corrected (a fraction of the range).")
 
 
 class BuildRecord(Strict):
