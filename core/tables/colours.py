@@ -56,8 +56,8 @@ def correction_columns(layout: Layout, values: dict[str, np.ndarray], channel: i
     grey = layout.grey_axes[0]
     cols = [col for d, col in zip(layout.dims, layout.columns(values, 0, dtype)) if d.axis != grey]
     u = layout.axes[grey].to_unit(np.asarray(values[grey]), dtype)
-    others = np.delete(u, channel, axis=-1)
-    cols += [u[..., channel], others.max(axis=-1), others.min(axis=-1)]
+    a, b = (u[..., c] for c in range(3) if c != channel)
+    cols += [u[..., channel], np.maximum(a, b), np.minimum(a, b)]  # not a reduction over an axis of 2: slow
     return np.clip(np.stack(cols, axis=-1), dtype(0.0), dtype(1.0))
 
 
@@ -120,7 +120,31 @@ class Polynomial:
         return np.stack(cols, axis=1) if cols else np.zeros((len(x), 0), x.dtype)
 
     def predict(self, x: np.ndarray, gap: np.ndarray) -> np.ndarray:
-        return self.design(x, gap) @ self.coef.astype(np.asarray(x).dtype)
+        """The correction at N inputs and gaps, in x's precision: each gap's polynomial summed term by
+        term (no N x terms design: a texture's blocks are predicted this way)."""
+        x = np.asarray(x)
+        dt, k = x.dtype, gap.shape[1]
+        if not k:
+            return np.zeros(len(x), dt)
+        coef = self.coef.reshape(len(self.terms), k).astype(dt)
+        cols = [np.ascontiguousarray(x[:, d]) for d in range(x.shape[1])]
+        accs = [np.zeros(len(x), dt) for _ in range(k)]
+        m, tmp = np.empty(len(x), dt), np.empty(len(x), dt)
+        for e, c in zip(self.terms, coef):
+            factors = [cols[d] for d, p in enumerate(e) for _ in range(int(p))]
+            if not factors:
+                for acc, cj in zip(accs, c):
+                    acc += cj
+                continue
+            np.copyto(m, factors[0])
+            for f in factors[1:]:
+                m *= f
+            for acc, cj in zip(accs, c):
+                acc += np.multiply(m, cj, out=tmp)
+        out = accs[0] * gap[:, 0].astype(dt)
+        for j in range(1, k):
+            out += accs[j] * gap[:, j].astype(dt)
+        return out
 
 
 def cv_miss(rows: Rows, degree: int | None) -> float:

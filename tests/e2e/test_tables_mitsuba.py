@@ -81,6 +81,25 @@ def test_build_resume_and_look_up(tmp_path, mitsuba_adapter, capsys):
     assert (tmp_path / "bare" / "material.xml").exists() and not (tmp_path / "bare" / "result.json").exists()
 
 
+def test_coloured_points_are_fitted_as_jobs_and_offered_as_corrections(tmp_path, mitsuba_adapter, capsys):
+    """`colours: N`: N coloured source materials fitted beside the grid (ordinary stored jobs), and
+    each map offered with their correction where it gains, judged on the held-out materials."""
+    small = {**SPEC, "axes": {"alpha": {"range": [0.1, 0.3], "steps": 2},
+                              "specular_reflectance": {"range": [0.3, 1.0], "steps": 3}},
+             "holdout": 2, "colours": 6, "continuation": False, "scene": {"resolution": 32}}
+    spec, out = _write(tmp_path / "spec.yaml", small), tmp_path / "table"
+    assert main(["table", "build", str(spec), "--out", str(out), "--quiet"]) == 0
+    assert "6 coloured points fitted" in capsys.readouterr().out
+    table = read_table(out)
+    assert table.schema_version == 3 and len(table.colours) == 6
+    for p in table.colours:
+        read_result(out / "colours" / p.id / "result.json")
+        assert len(set(p.values["specular_reflectance"])) == 3  # not grey
+    corrected = {m: c for m, c in table.candidates.items() if c.correction}
+    assert corrected and all(m.endswith("+colours") and c.median_ratio is not None for m, c in corrected.items())
+    assert all(set(c.correction) == {"specular_reflectance"} for c in corrected.values())  # alpha is shared
+
+
 def test_lookup_errors_are_one_line(tmp_path):
     # A table another model's material cannot use; an edited table; a value the table was not built for.
     from tablekit import write_synthetic
