@@ -46,30 +46,28 @@ def accuracy(args) -> None:
     rows, tails = [], []
     with workers(args.jobs) as w, adapter_pool(registry):
         for path in args.tables:
+            t0 = time.perf_counter()
             table = read_table(path)
+            spec = table.spec
+            settings = spec.options.model_copy(update={"validation": "none"})
+            drawn = table.layout.draw(args.n, ACCURACY_SEED)
+            store = Store(Path(args.out) / Path(path).resolve().name)
+            jobs = [Job(source=Material(adapter=spec.source.adapter, model=spec.source.model,
+                                        params={**spec.source.params, **values}, name=f"r{i:03d}"),
+                        target=spec.target, scene=table.scene, settings=settings, label=f"bench r{i:03d}")
+                    for i, values in enumerate(drawn)]
+            direct = Runner(store, w, quiet=args.quiet, stop_on_error=False).run(
+                [Task(f"direct/r{i:03d}", resolve(job, registry).job, f"direct r{i:03d}") for i, job in enumerate(jobs)])
+            d_err = np.array([_err(d) for d in direct])
+            a_err = np.array([_err(d, start=True) for d in direct])  # the exporters' conversion
             for method in (args.maps.split(",") if args.maps else [table.chosen]):
-                t0 = time.perf_counter()
                 if method not in table.candidates:
                     raise SystemExit(f"{path}: no map {method!r} (its maps: {', '.join(table.candidates)})")
                 tmap = TableMap(table, method)
-                spec = table.spec
-                settings = spec.options.model_copy(update={"validation": "none"})
-                drawn = table.layout.draw(args.n, ACCURACY_SEED)
-                store = Store(Path(args.out) / Path(path).resolve().name)
-                direct, lookups = [], []
-                for i, values in enumerate(drawn):
-                    src = Material(adapter=spec.source.adapter, model=spec.source.model,
-                                   params={**spec.source.params, **values}, name=f"r{i:03d}")
-                    job = Job(source=src, target=spec.target, scene=table.scene, settings=settings,
-                              label=f"bench r{i:03d}")
-                    direct.append(Task(f"direct/r{i:03d}", resolve(job, registry).job, f"direct r{i:03d}"))
-                    lk = look_up(table, tmap, values).lookup
-                    lookups.append(Task(f"lookup/{method}/r{i:03d}", resolve(job.model_copy(update={"lookup": lk}),
-                                                                             registry).job, f"lookup r{i:03d}"))
-                done = Runner(store, w, quiet=args.quiet, stop_on_error=False).run(direct + lookups)
-                d_err = np.array([_err(d) for d in done[:args.n]])
-                a_err = np.array([_err(d, start=True) for d in done[:args.n]])  # the exporters' conversion
-                l_err = np.array([_err(d) for d in done[args.n:]])
+                lookups = [Task(f"lookup/{method}/r{i:03d}", resolve(job.model_copy(update={
+                    "lookup": look_up(table, tmap, values).lookup}), registry).job, f"lookup r{i:03d}")
+                    for i, (job, values) in enumerate(zip(jobs, drawn))]
+                l_err = np.array([_err(d) for d in Runner(store, w, quiet=args.quiet, stop_on_error=False).run(lookups)])
                 ratio, analytic = l_err / d_err, a_err / d_err
                 ok = np.isfinite(ratio)
                 rows.append((table.name, method, int(ok.sum()), float(np.median(ratio[ok])),
@@ -77,6 +75,7 @@ def accuracy(args) -> None:
                              float(np.mean(ratio[ok] <= 1.05)), float(np.nanmedian(analytic)),
                              float(np.median(d_err[ok])), float(np.median(l_err[ok])), time.perf_counter() - t0))
                 tails.append((f"{table.name} ({method})", _worst(drawn, d_err, l_err)))
+                t0 = time.perf_counter()
     print(f"{'table':<62} {'map':<16} {'n':>3} {'median':>7} {'p95':>6} {'max':>6} {'<=1.05':>7} {'analytic':>8} "
           f"{'direct':>7} {'lookup':>7} {'s':>6}")
     for name, method, n, med, p95, worst, frac, ana, d, lk, secs in rows:

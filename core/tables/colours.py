@@ -106,17 +106,9 @@ class Polynomial:
                                aw.T @ y)
 
     def design(self, x: np.ndarray, gap: np.ndarray) -> np.ndarray:
+        """N x (terms x gaps): each term's monomial times each gap (the fit's matrix)."""
         x = np.asarray(x)
-        powers = [np.ones_like(x)]
-        for _ in range(int(self.terms.max(initial=0))):
-            powers.append(powers[-1] * x)
-        cols = []
-        for e in self.terms:
-            col = np.ones(len(x), x.dtype)
-            for d, k in enumerate(e):
-                if k:
-                    col = col * powers[k][:, d]
-            cols += [col * gap[:, j].astype(x.dtype) for j in range(gap.shape[1])]
+        cols = [m * gap[:, j].astype(x.dtype) for m in _monomials(x, self.terms) for j in range(gap.shape[1])]
         return np.stack(cols, axis=1) if cols else np.zeros((len(x), 0), x.dtype)
 
     def predict(self, x: np.ndarray, gap: np.ndarray) -> np.ndarray:
@@ -127,24 +119,28 @@ class Polynomial:
         if not k:
             return np.zeros(len(x), dt)
         coef = self.coef.reshape(len(self.terms), k).astype(dt)
-        cols = [np.ascontiguousarray(x[:, d]) for d in range(x.shape[1])]
         accs = [np.zeros(len(x), dt) for _ in range(k)]
-        m, tmp = np.empty(len(x), dt), np.empty(len(x), dt)
-        for e, c in zip(self.terms, coef):
-            factors = [cols[d] for d, p in enumerate(e) for _ in range(int(p))]
-            if not factors:
-                for acc, cj in zip(accs, c):
-                    acc += cj
-                continue
-            np.copyto(m, factors[0])
-            for f in factors[1:]:
-                m *= f
+        tmp = np.empty(len(x), dt)
+        for m, c in zip(_monomials(x, self.terms), coef):
             for acc, cj in zip(accs, c):
                 acc += np.multiply(m, cj, out=tmp)
         out = accs[0] * gap[:, 0].astype(dt)
         for j in range(1, k):
             out += accs[j] * gap[:, j].astype(dt)
         return out
+
+
+def _monomials(x: np.ndarray, terms: np.ndarray):
+    """Each term's monomial of x's columns (exponents ``terms``), in one buffer the caller uses before
+    the next: a product of columns, never a power or a reduction."""
+    cols = [np.ascontiguousarray(x[:, d]) for d in range(x.shape[1])]
+    m = np.empty(len(x), x.dtype)
+    for e in terms:
+        m.fill(1)
+        for d, p in enumerate(e):
+            for _ in range(int(p)):
+                m *= cols[d]
+        yield m
 
 
 def cv_miss(rows: Rows, degree: int | None) -> float:
