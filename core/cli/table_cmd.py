@@ -74,7 +74,8 @@ def _summary(t) -> None:
     print(f"fits           {b.used} used, {b.flagged} flagged unreliable, {b.left_out} left out of the regression "
           f"({b.left_out - cliffs} whose fit is in question, {cliffs} cliffs)"
           + (f"; {remedied} refitted as their findings advised" if remedied else "")
-          + (f"; {continued} continued from their neighbours" if t.spec.continuation else ""))
+          + (f"; {continued} continued from their neighbours" if t.spec.continuation or t.spec.follow else "")
+          + (f" along {', '.join(t.spec.follow)}" if t.spec.follow else ""))
     if t.colours:
         used = sum(pt.used for pt in t.colours)
         took = sum(c.correction is not None for c in t.candidates.values())

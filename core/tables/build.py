@@ -29,7 +29,8 @@ from .colours import choose_degree, shared_outputs
 from .maps import METHODS, build, choose_hyperparameter
 from .outputs import choose_scales, outputs_for
 from .plan import Plan, fitted_names, plan, point_task, record, shown
-from .refits import continue_points, leave_out_cliffs, refits_account, remedy_points
+from .refits import (continue_points, follow_colours, follow_points, leave_out_cliffs, refits_account,
+                     remedy_points)
 from .spec import TableSpec
 from .table import (
     TABLE_SCHEMA_VERSION,
@@ -118,7 +119,7 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
         n, m = len(grid_tasks), len(grid_tasks) + len(held_tasks)
         grid_done, held_done, colour_done = done[:n], done[n:m], done[m:]
         firsts = [record(t.slot.split("/")[1], v, d, idx) for t, (idx, v), d in zip(grid_tasks, p.grid, grid_done)]
-        points = remedy_points(p, registry, runner, scene, firsts)
+        points = _refitted(p, registry, runner, scene, firsts)
         first_colours = [record(t.slot.split("/")[1], v, d) for t, v, d in zip(colour_tasks, p.colours, colour_done)]
         colours = remedy_points(p, registry, runner, scene, first_colours, "colours")
         need = len(p.layout.dims) + 2
@@ -128,10 +129,13 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
                               f"use, and a map over {need - 2} dimensions needs {need}: see points.csv for why",
                               file=file)
         held = [record(t.slot.split("/")[1], v, d) for t, v, d in zip(held_tasks, p.held, held_done)]
-        first = next(d.report for d, pt in zip(grid_done, points) if pt.used)
+        first = next(d.report for d, pt in sorted(zip(grid_done, points), key=lambda dp: not dp[1].used)
+                     if d.report is not None)  # a used point's first fit, else any (a followed one may have failed)
         draft = _draft(p, file, spec, points, held, fitted_names(p, points, grid_done), first, scene
                        ).model_copy(update={"colours": colours})
         draft = draft.model_copy(update={"outputs": choose_scales(draft.outputs, lambda o: grid_of(draft, o))})
+        if spec.follow and draft.colours:
+            draft = draft.model_copy(update={"colours": follow_colours(p, registry, runner, draft)})
         if spec.continuation:
             draft = draft.model_copy(update={"points": continue_points(p, registry, runner, draft)})
         draft = draft.model_copy(update={"points": leave_out_cliffs(draft)})
@@ -144,8 +148,8 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
         table = draft.model_copy(update={"candidates": candidates, "chosen": chosen, "chosen_why": why})
         renders, seconds = checks_account(folder, table)
         final = table.points  # after continuation and the cliffs
-        refit_renders, refit_seconds = refits_account(folder, final)
-        colour_renders, colour_seconds = refits_account(folder, colours, "colours")
+        refit_renders, refit_seconds = refits_account(folder, final, follow=tuple(spec.follow))
+        colour_renders, colour_seconds = refits_account(folder, colours, "colours", follow=tuple(spec.follow))
         table = table.model_copy(update={"build": BuildRecord(
             points=len(final), used=sum(pt.used for pt in final),
             flagged=sum(pt.verdict in ("unreliable", "failed") for pt in final),
@@ -156,6 +160,15 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
         write_table(folder / "table.json", table)
         write_points_csv(folder / "points.csv", table)
     return table
+
+
+def _refitted(p: Plan, registry: AdapterRegistry, runner: Runner, scene, firsts: list) -> list:
+    """The grid's fits after the remedies their findings name, then path following along each axis
+    of ``follow``."""
+    points = remedy_points(p, registry, runner, scene, firsts)
+    for axis in p.spec.follow:
+        points = follow_points(p, registry, runner, scene, points, axis)
+    return points
 
 
 def _draft(p: Plan, file: str, spec: TableSpec, points, held, names, first, scene) -> Table:

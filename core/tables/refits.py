@@ -1,6 +1,8 @@
 """Refits of a table's grid points, each a remap job stored beside its point: the remedy a fit's
-finding names (`remedy_points`), continuation from the neighbours' map (`continue_points`), cliffs
-left out (`leave_out_cliffs`), and what all refits cost (`refits_account`)."""
+finding names (`remedy_points`), path following along an axis (`follow_points`, carried to the coloured points by
+`follow_colours`), continuation from
+the neighbours' map (`continue_points`), cliffs left out (`leave_out_cliffs`), and what all refits
+cost (`refits_account`)."""
 
 from __future__ import annotations
 
@@ -52,6 +54,70 @@ def _remedy(pt: PointRecord, options) -> dict:
     return {}
 
 
+SWEEPS = (("up", 1), ("down", -1))
+"""Path following runs up an axis, then back down it (a better family found high up reaches the
+points below it too)."""
+
+
+def refit_folders(follow: list[str] | tuple[str, ...] = ()) -> tuple[str, ...]:
+    """The folders a point's refits are stored in, beside it: the remedy, continuation, and with
+    path following along the axes ``follow``, each sweep's and the coloured points' refit."""
+    return ("remedy", "continued", *(f"{a}-{s}" for a in follow for s, _ in SWEEPS)) + (("followed",) if follow
+                                                                                        else ())
+
+
+def follow_points(p: Plan, registry: AdapterRegistry, runner: Runner, scene, points: list[PointRecord],
+                  axis: str) -> list[PointRecord]:
+    """Path following along one axis: step by step up the axis, then back down, each grid point
+    fitted again from one start, its predecessor's fit (as it stands after its own refit); the refit
+    replaces the fit where its error ends lower (`_lower`). Each step's points are fitted together,
+    stored as `points/<id>/<axis>-up/` and `-down/`."""
+    d = next(i for i, dim in enumerate(p.layout.dims) if dim.axis == axis)
+    n = p.spec.axes[axis].steps
+    settings = p.spec.options.model_copy(update={"starts": 1})
+    at = {tuple(pt.index): i for i, pt in enumerate(points)}
+    out = list(points)
+    for sweep, way in SWEEPS:
+        for k in (range(1, n) if way > 0 else range(n - 2, -1, -1)):
+            tasks, which = [], []
+            for idx, i in at.items():
+                before = at.get(idx[:d] + (k - way,) + idx[d + 1:])
+                if idx[d] != k or before is None or out[before].params is None:
+                    continue
+                pt = out[i]
+                tasks.append(point_task(p, registry, f"points/{pt.id}/{axis}-{sweep}", pt.values,
+                                        f"{pt.id} {axis} {sweep}", scene, settings, start=out[before].params))
+                which.append(i)
+            for i, done in zip(which, runner.run(tasks)):
+                out[i] = _lower(out[i], done)
+    return out
+
+
+def _lower(first: PointRecord, done) -> PointRecord:
+    """The refit's record where its error ends lower than the point's fit (or the fit failed), marked
+    continued, with the first fit's error; else the fit. A refit in question never replaces a fit the
+    map uses. No margin for the noise: where the two are alike, the followed one keeps the family."""
+    if done.report is None:
+        return first
+    again = record(first.id, first.values, done, tuple(first.index))
+    if first.error is not None and (again.error >= first.error or (first.used and not again.used)):
+        return first
+    return again.model_copy(update={"continued": True, "remedy": first.remedy, "first_error":
+                                    first.first_error if first.first_error is not None else first.error})
+
+
+def follow_colours(p: Plan, registry: AdapterRegistry, runner: Runner, draft: Table) -> list[PointRecord]:
+    """Each coloured point fitted again from one start, the grid's map at its colour (a lightly
+    smoothed RBF of the used grid fits, uncorrected): the path following of the grid carried to the
+    coloured points. The refit replaces the fit where it ends lower; stored as
+    `colours/<id>/followed/`."""
+    start = _smooth_map(draft, draft.points)
+    settings = draft.spec.options.model_copy(update={"starts": 1})
+    tasks = [point_task(p, registry, f"colours/{pt.id}/followed", pt.values, f"{pt.id} from the grid", draft.scene,
+                        settings, start=start.params(pt.values)[0]) for pt in draft.colours]
+    return [_lower(pt, done) for pt, done in zip(draft.colours, runner.run(tasks))]
+
+
 CONTINUE_SLACK, CONTINUE_NOISE, CONTINUE_SMOOTHING = 1.02, 0.5, 1e-3
 """A refit from the neighbours' map replaces a point's first fit when its error is at most this much
 of the first's, plus this much of the render noise (at the noise, two fits are alike); the
@@ -85,9 +151,14 @@ def continue_points(p: Plan, registry: AdapterRegistry, runner: Runner, draft: T
 
 def _neighbours_map(draft: Table, i: int) -> TableMap:
     """The map of every used point but the i-th (a thin-plate RBF, lightly smoothed)."""
-    others = [pt.model_copy(update={"used": False}) if j == i else pt for j, pt in enumerate(draft.points)]
+    return _smooth_map(draft, [pt.model_copy(update={"used": False}) if j == i else pt
+                               for j, pt in enumerate(draft.points)])
+
+
+def _smooth_map(draft: Table, points: list[PointRecord]) -> TableMap:
+    """The map of these points' used fits (a thin-plate RBF, lightly smoothed), uncorrected."""
     hyper = {o.label: CONTINUE_SMOOTHING for o in draft.outputs}
-    return TableMap(draft.model_copy(update={"points": others, "candidates": {"rbf": Candidate(
+    return TableMap(draft.model_copy(update={"points": points, "candidates": {"rbf": Candidate(
         method="rbf", hyper=hyper, cv_rms={})}}), "rbf")
 
 
@@ -129,14 +200,15 @@ def leave_out_cliffs(draft: Table) -> list[PointRecord]:
     return points
 
 
-def refits_account(folder: Path, points: list[PointRecord], under: str = "points") -> tuple[int, float]:
-    """Target renders and seconds of the refits stored under ``under`` (remedies and continuation,
-    kept or not)."""
+def refits_account(folder: Path, points: list[PointRecord], under: str = "points",
+                   follow: tuple[str, ...] = ()) -> tuple[int, float]:
+    """Target renders and seconds of the refits stored under ``under`` (`refit_folders`: remedies,
+    continuation, and path following along the axes ``follow``, kept or not)."""
     from ..report import read_report
 
     renders, seconds = 0, 0.0
     for pt in points:
-        for refit in ("remedy", "continued"):
+        for refit in refit_folders(follow):
             try:
                 r = read_report(folder / under / pt.id / refit / "result.json")
             except ConfigError:

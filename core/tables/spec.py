@@ -103,11 +103,27 @@ class TableSpec(Strict):
                                                   "become one family a map can follow). Twice the fits; off by "
                                                   "default: on the shipped tables it did not bring lookups closer "
                                                   "to direct fits (docs/tables.md).")
+    follow: list[str] = Field(default_factory=list, description="Axes along which each grid point is fitted again "
+                                                                "from its neighbour's fit, one start, up the axis and "
+                                                                "then back down; the refit replaces the fit where it "
+                                                                "ends lower (path following: where a fit from the "
+                                                                "exporters' conversion falls into a worse optimum, as "
+                                                                "a rough plastic's at high roughness, its "
+                                                                "neighbours lead it into theirs, and the fits become "
+                                                                "one family a map can follow). Up to two refits a "
+                                                                "point per axis; coloured points are then fitted again "
+                                                                "from the grid's map, one refit each.")
     scene: SceneSpec = SceneSpec()
     options: Settings = Field(default_factory=Settings, description="How every fit runs (as `remap`'s flags).")
 
     @model_validator(mode="after")
     def _check(self) -> "TableSpec":
+        if len(set(self.follow)) < len(self.follow):
+            raise ValueError(f"follow: {', '.join(self.follow)}: an axis named twice (each is followed once)")
+        for name in self.follow:
+            if name not in self.axes or self.axes[name].mode == "channels":
+                raise ValueError(f"follow: {name!r} is not a scalar or grey axis of the grid (axes: "
+                                 f"{', '.join(a for a, ax in self.axes.items() if ax.mode != 'channels')})")
         shared = sorted(set(self.axes) & set(self.source.params))
         if shared:
             raise ValueError(f"axes.{shared[0]}: also given in source.params: an axis's values come from the grid")

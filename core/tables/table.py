@@ -22,11 +22,12 @@ from .maps import Grid, Regressor, build
 from .outputs import ERROR, Output, assemble, target_value
 from .spec import Layout, TableSpec
 
-TABLE_SCHEMA_VERSION = 3
+TABLE_SCHEMA_VERSION = 4
 """2: an output the channels share is looked up at each channel's grey level and weighted (was: at the
 mean grey level); a table of 1 is built again into its folder, which reuses its fits. 3: coloured
-points and maps corrected by them (`colours`); a table of 2 has neither and is read as it is."""
-READS = (2, 3)
+points and maps corrected by them (`colours`); a table of 2 has neither and is read as it is. 4: path
+following along axes of the grid (`spec.follow`); tables of 2 and 3 have none and are read as they are."""
+READS = (2, 3, 4)
 
 
 class PointRecord(Strict):
@@ -46,7 +47,8 @@ class PointRecord(Strict):
     renders: int = 0
     seconds: float = 0.0
     key: str = ""
-    continued: bool = Field(False, description="The refit from its neighbours' map replaced the first fit.")
+    continued: bool = Field(False, description="A refit from its neighbours (their map, or its neighbour's fit along "
+                                               "an axis of `follow`) replaced the first fit.")
     remedy: str = Field("", description="The settings of the refit its first fit's finding named as the remedy, "
                                         "where that refit replaced the first fit ('': none did).")
     first_error: float | None = Field(None, description="The first fit's relative RMSE, where a refit replaced it.")
@@ -132,6 +134,8 @@ class Table(WithDerived):
                                                     "colours": {"__all__": timing}})
         if not doc["colours"]:  # format 2 had none: its tables keep their digests
             del doc["colours"], doc["spec"]["colours"]
+        if not doc["spec"]["follow"]:  # nor had 3 path following
+            del doc["spec"]["follow"]
         for c in doc["candidates"].values():
             if c["correction"] is None:
                 del c["correction"], c["correction_cv"]

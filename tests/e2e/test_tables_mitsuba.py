@@ -4,10 +4,12 @@ again on a Dask cluster."""
 
 import json
 
+import pytest
 import yaml
 
 from brdfremap.core.cli import main
 from brdfremap.core.tables import read_table
+from brdfremap.core.tables.table import TABLE_SCHEMA_VERSION
 from helpers import one_line_error, remap
 from reports import read_result
 
@@ -91,13 +93,47 @@ def test_coloured_points_are_fitted_as_jobs_and_offered_as_corrections(tmp_path,
     assert main(["table", "build", str(spec), "--out", str(out), "--quiet"]) == 0
     assert "6 coloured points fitted" in capsys.readouterr().out
     table = read_table(out)
-    assert table.schema_version == 3 and len(table.colours) == 6
+    assert table.schema_version == TABLE_SCHEMA_VERSION and len(table.colours) == 6
     for p in table.colours:
         read_result(out / "colours" / p.id / "result.json")
         assert len(set(p.values["specular_reflectance"])) == 3  # not grey
     corrected = {m: c for m, c in table.candidates.items() if c.correction}
     assert corrected and all(m.endswith("+colours") and c.median_ratio is not None for m, c in corrected.items())
     assert all(set(c.correction) == {"specular_reflectance"} for c in corrected.values())  # alpha is shared
+
+
+def test_path_following_refits_along_an_axis_and_keeps_only_lower_fits(tmp_path, mitsuba_adapter, capsys):
+    """`follow: [alpha]`: each grid point fitted again from its neighbour's fit along alpha, up then
+    down, and each coloured point from the grid's map: stored jobs, each point's fit the lowest of
+    its fits, and every refit counted once in the build's renders."""
+    small = {**SPEC, "axes": {"alpha": {"range": [0.1, 0.3], "steps": 3},
+                              "specular_reflectance": {"range": [0.5, 1.0], "steps": 2}},
+             "holdout": 2, "colours": 2, "continuation": False, "follow": ["alpha"], "scene": {"resolution": 32}}
+    spec, out = _write(tmp_path / "spec.yaml", small), tmp_path / "table"
+    assert main(["table", "build", str(spec), "--out", str(out), "--quiet"]) == 0
+    assert "continued from their neighbours along alpha" in capsys.readouterr().out
+    table = read_table(out)
+    assert table.schema_version == TABLE_SCHEMA_VERSION
+    by_index = {tuple(p.index): p for p in table.points}
+    for p in table.points:  # up from the lowest alpha, down from the highest
+        folder = out / "points" / p.id
+        ups, downs = folder / "alpha-up" / "result.json", folder / "alpha-down" / "result.json"
+        assert ups.exists() == (p.index[0] > 0) and downs.exists() == (p.index[0] < 2)
+        fits = [read_result(f) for f in (folder / "result.json", folder / "remedy" / "result.json", ups, downs)
+                if f.exists()]
+        assert p.error == min(f["metrics"]["relative_rmse"] for f in fits)  # the lowest of its fits
+        assert p.continued == (p.error < fits[0]["metrics"]["relative_rmse"])
+        if p.index[0] == 1:  # the first step up starts from the fit below it as it stood (its first or remedy)
+            below = out / "points" / by_index[(0, p.index[1])].id
+            starts = [read_result(f)["params"] for f in (below / "result.json", below / "remedy" / "result.json")
+                      if f.exists()]
+            start = read_result(ups)["job"]["start"]
+            assert any(all(start[k] == pytest.approx(s[k]) for k in start) for s in starts)
+    for p in table.colours:
+        fits = [read_result(out / "colours" / p.id / f / "result.json") for f in (".", "followed")]
+        assert p.error == min(f["metrics"]["relative_rmse"] for f in fits)
+    stored = sum(read_result(f)["renders"] for f in out.rglob("result.json"))
+    assert table.build.renders == stored  # every fit, refit and check counted once
 
 
 def test_lookup_errors_are_one_line(tmp_path):

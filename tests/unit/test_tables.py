@@ -383,16 +383,21 @@ def test_coloured_points_correct_a_map_where_the_target_couples_the_channels(tmp
     assert not any(c.correction for c in fit_candidates(unshared).values())
 
 
-def test_a_table_of_format_2_is_read_as_it_is(tmp_path):
-    """Format 3 added coloured points; a format-2 file has none of their fields, and keeps its digest."""
-    table = synthetic_table(tmp_path).model_copy(update={"schema_version": 2})
+@pytest.mark.parametrize("version", [2, 3])
+def test_a_table_of_an_earlier_format_is_read_as_it_is(tmp_path, version):
+    """Format 3 added coloured points, format 4 path following: a file of 2 or 3 has none of the
+    later fields, and keeps its digest."""
+    table = synthetic_table(tmp_path).model_copy(update={"schema_version": version})
     doc = json.loads(write_table(tmp_path / "t.json", table).read_text())
-    del doc["colours"], doc["spec"]["colours"]  # what format 2 wrote
-    for c in doc["candidates"].values():
-        del c["correction"], c["correction_cv"]
-    (tmp_path / "v2.json").write_text(json.dumps(doc))
-    again = read_table(tmp_path / "v2.json")
-    assert again.schema_version == 2 and again.digest == doc["digest"] and not again.colours
+    del doc["spec"]["follow"]  # what formats 2 and 3 wrote
+    if version == 2:
+        del doc["colours"], doc["spec"]["colours"]
+        for c in doc["candidates"].values():
+            del c["correction"], c["correction_cv"]
+    (tmp_path / "old.json").write_text(json.dumps(doc))
+    again = read_table(tmp_path / "old.json")
+    assert again.schema_version == version and again.digest == doc["digest"] and not again.colours
+    assert again.spec.follow == []
 
 
 @pytest.mark.parametrize("change, words", [
@@ -405,3 +410,67 @@ def test_coloured_points_need_one_grey_axis_and_held_out_materials(tmp_path, cha
     path = _spec(tmp_path, colours=8, **change)
     with pytest.raises(ConfigError, match=words):
         plan(load_table_spec(path), str(path), collect_adapters())
+
+
+@pytest.mark.parametrize("axis", ["alpha", "specular_reflectance"])
+def test_path_following_refits_each_step_from_its_predecessor_as_it_now_stands(tmp_path, axis):
+    """`follow_points` along each axis (alpha: 4 steps; the grey levels: 3) with a runner that hands
+    back finished fits (up: lower, down: higher): up the axis each point starts from the fit before it
+    as it now stands, so the refits add up; a refit in question does not replace a used fit; a
+    failed fit starts nobody and takes any refit; down, every refit is higher and none is kept."""
+    from types import SimpleNamespace
+
+    from brdfremap.core.runner import Done
+    from brdfremap.core.tables.refits import follow_points
+    from brdfremap.core.tables.table import PointRecord
+
+    registry = collect_adapters()
+    p = plan(load_table_spec(_spec(tmp_path, follow=[axis])), "spec.yaml", registry)
+    d = [dim.axis for dim in p.layout.dims].index(axis)
+    n, lines = p.spec.axes[axis].steps, len(p.grid) // p.spec.axes[axis].steps
+    first = [PointRecord(id=f"g{k}", index=list(i), values=v, params={"alpha": 0.1}, error=0.06, verdict="ok",
+                         used=True) for k, (i, v) in enumerate(p.grid)]
+    line = [tuple(pt.index[:d] + pt.index[d + 1:]) for pt in first]
+    bottoms = [k for k, pt in enumerate(first) if pt.index[d] == 0]
+    failed_line, questioned_line = line[bottoms[0]], line[bottoms[1]]
+    first[bottoms[0]] = first[bottoms[0]].model_copy(update={"params": None, "error": None, "used": False})
+    questioned = next(k for k, pt in enumerate(first) if line[k] == questioned_line and pt.index[d] == 1)
+    waves = []
+
+    class Handing:
+        def run(self, tasks):
+            waves.append(tasks)
+            return [Done(task=t, resumed=False, report=SimpleNamespace(
+                findings=[SimpleNamespace(kind="not_at_minimum", severity="unreliable", message="short")]
+                if t.slot == f"points/g{questioned}/{axis}-up" else [],
+                params={"alpha": t.job.start["alpha"] + 0.01},
+                metrics=SimpleNamespace(relative_rmse=0.09 if t.slot.endswith("-down") else 0.05, noise_floor=0.01),
+                verdict="ok", reliable=True, reason="", renders=60, seconds=1.0, key="k")) for t in tasks]
+
+    out = follow_points(p, registry, Handing(), p.spec.scene.scene(tmp_path), first, axis)
+    assert [len(w) for w in waves] == [lines - 1] + [lines] * (2 * n - 3)  # the failed bottom starts nobody
+    assert all(t.job.settings.starts == 1 for w in waves for t in w)
+    assert all(t.slot.endswith(f"/{axis}-up") for w in waves[:n - 1] for t in w)
+    assert all(t.slot.endswith(f"/{axis}-down") for w in waves[n - 1:] for t in w)
+    for k, pt in enumerate(out):
+        i = pt.index[d]
+        held = {failed_line: 1, questioned_line: 1}.get(line[k])  # the step whose fit stays the first
+        if i == held or (i == 0 and line[k] != failed_line):
+            assert pt == first[k], pt.id
+        elif i == 0:  # failed: the down sweep's refit, from the first fit above it
+            assert pt.params["alpha"] == pytest.approx(0.11) and pt.error == 0.09 and pt.continued
+            assert pt.first_error is None
+        else:
+            steps = i - 1 if held else i
+            assert pt.params["alpha"] == pytest.approx(0.1 + 0.01 * steps), pt.id
+            assert pt.continued and pt.error == 0.05 and pt.first_error == 0.06
+
+
+def test_follow_names_an_axis_of_the_grid_once(tmp_path):
+    with pytest.raises(ConfigError, match="follow: 'roughness' is not a scalar or grey axis"):
+        load_table_spec(_spec(tmp_path, follow=["roughness"]))
+    with pytest.raises(ConfigError, match="an axis named twice"):
+        load_table_spec(_spec(tmp_path, follow=["alpha", "alpha"]))
+    channels = {**SPEC["axes"], "specular_reflectance": {**SPEC["axes"]["specular_reflectance"], "mode": "channels"}}
+    with pytest.raises(ConfigError, match="follow: 'specular_reflectance' is not a scalar or grey axis"):
+        load_table_spec(_spec(tmp_path, axes=channels, follow=["specular_reflectance"]))
