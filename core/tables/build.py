@@ -129,8 +129,8 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
                               f"use, and a map over {need - 2} dimensions needs {need}: see points.csv for why",
                               file=file)
         held = [record(t.slot.split("/")[1], v, d) for t, v, d in zip(held_tasks, p.held, held_done)]
-        first = next(d.report for d, pt in sorted(zip(grid_done, points), key=lambda dp: not dp[1].used)
-                     if d.report is not None)  # a used point's first fit, else any (a followed one may have failed)
+        first = (next((d.report for d, pt in zip(grid_done, points) if pt.used and d.report is not None), None)
+                 or next(d.report for d in grid_done if d.report is not None))  # a followed point's may have failed
         draft = _draft(p, file, spec, points, held, fitted_names(p, points, grid_done), first, scene
                        ).model_copy(update={"colours": colours})
         draft = draft.model_copy(update={"outputs": choose_scales(draft.outputs, lambda o: grid_of(draft, o))})

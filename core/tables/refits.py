@@ -1,8 +1,7 @@
 """Refits of a table's grid points, each a remap job stored beside its point: the remedy a fit's
-finding names (`remedy_points`), path following along an axis (`follow_points`, carried to the coloured points by
-`follow_colours`), continuation from
-the neighbours' map (`continue_points`), cliffs left out (`leave_out_cliffs`), and what all refits
-cost (`refits_account`)."""
+finding names (`remedy_points`), path following along an axis (`follow_points`, carried to the
+coloured points by `follow_colours`), continuation from the neighbours' map (`continue_points`),
+cliffs left out (`leave_out_cliffs`), and what all refits cost (`refits_account`)."""
 
 from __future__ import annotations
 
