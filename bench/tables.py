@@ -148,7 +148,7 @@ def texture_set(table, tmap, n: int) -> None:
         for name, ax in spec.axes.items():
             p = src_spec.param(name)
             shape = (n, n, 3) if p.kind == "rgb" else (n, n)
-            values = ax.from_unit(_smooth(rng, shape)).astype(np.float32)
+            values = ax.sample(_smooth(rng, shape)).astype(np.float32)
             suffix, space = kind_of_file(p.lower, p.upper, p.kind == "rgb")
             f = Path(tmp) / f"{name}{suffix}"
             f.write_bytes(encode(values, suffix, space))

@@ -20,10 +20,11 @@ SPEC = {
 }
 
 
-def synthetic_table(tmp_path) -> Table:
-    """A table whose 'fits' follow a known rule: Ward's reflectance = 0.9 x the source's, alpha = 1.1 x."""
+def synthetic_table(tmp_path, axes: dict | None = None) -> Table:
+    """A table whose 'fits' follow a known rule: Ward's reflectance = 0.9 x the source's, alpha = 1.1 x
+    (``axes``: the spec's axes instead of SPEC's)."""
     path = tmp_path / "synthetic-spec.yaml"
-    path.write_text(yaml.safe_dump(json.loads(json.dumps(SPEC))))
+    path.write_text(yaml.safe_dump(json.loads(json.dumps({**SPEC, **({"axes": axes} if axes else {})}))))
     spec = load_table_spec(path)
     layout = Layout(spec.axes, {"alpha": "scalar", "specular_reflectance": "rgb"})
     from brdfremap.adapters.mitsuba.models import MODELS
@@ -43,7 +44,7 @@ def synthetic_table(tmp_path) -> Table:
                   target_params=ward.complete({"diffuse_reflectance": 0.0}), versions={"mitsuba": "2"},
                   outputs=outputs_for(ward, ["specular_reflectance", "alpha"], layout.separable), points=points,
                   holdout=[], candidates={}, chosen="polynomial", chosen_why="test",
-                  build=BuildRecord(points=12, used=11, flagged=1, left_out=1, holdout=0, renders=0, seconds=0,
+                  build=BuildRecord(points=len(points), used=len(points) - 1, flagged=1, left_out=1, holdout=0, renders=0, seconds=0,
                                     wall_seconds=0, ran_in="test"))
     from brdfremap.core.tables.build import fit_candidates
 

@@ -63,7 +63,7 @@ def show(args: argparse.Namespace) -> int:
 
 def _summary(t) -> None:
     s, b = t.spec, t.build
-    axes = " x ".join(f"{n} {a.steps}" + (" per channel" if a.mode == "channels" and t.source_kinds[n] == "rgb"
+    axes = " x ".join(f"{n} {a.count}" + (" per channel" if a.mode == "channels" and t.source_kinds[n] == "rgb"
                                             else "") for n, a in s.axes.items())
     print(f"table          {t.name}: {s.source.adapter}:{s.source.model} -> {s.target.adapter}:{s.target.model}")
     print(f"grid           {axes} = {b.points} points; mapped: "

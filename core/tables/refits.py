@@ -72,7 +72,7 @@ def follow_points(p: Plan, registry: AdapterRegistry, runner: Runner, scene, poi
     replaces the fit where its error ends lower (`_lower`). Each step's points are fitted together,
     stored as `points/<id>/<axis>-up/` and `-down/`."""
     d = next(i for i, dim in enumerate(p.layout.dims) if dim.axis == axis)
-    n = p.spec.axes[axis].steps
+    n = p.spec.axes[axis].count
     settings = p.spec.options.model_copy(update={"starts": 1})
     at = {tuple(pt.index): i for i, pt in enumerate(points)}
     out = list(points)

@@ -31,8 +31,15 @@ CHANNELS = "rgb"
 
 class Axis(Strict):
     range: tuple[float, float] = Field(description="Lowest and highest value sampled (within the parameter's "
-                                                   "bounds).")
-    steps: int = Field(ge=2, le=64, description="Values sampled, both ends included.")
+                                                   "bounds); held-out and coloured materials are drawn inside it.")
+    steps: int | None = Field(None, ge=2, le=64, description="Values sampled, both ends included, evenly spaced "
+                                                             "(give steps or values).")
+    values: list[float] | None = Field(None, min_length=2, max_length=64,
+                                       description="The values sampled, increasing, from the range's lower end to "
+                                                   "its upper (instead of steps): closer together where the map bends "
+                                                   "(a dark colour, where a target's fits turn from one optimum to "
+                                                   "another). Between two of them the map interpolates evenly in the "
+                                                   "value, or in its logarithm with scale: log.")
     scale: Literal["linear", "log"] = Field("linear", description="Spacing of the values: even, or even in the "
                                                                    "logarithm (roughness: most change is near 0).")
     mode: Literal["scale", "channels"] = Field(
@@ -47,16 +54,30 @@ class Axis(Strict):
             raise ValueError("range must be two finite numbers, the lower first")
         if self.scale == "log" and lo <= 0:
             raise ValueError("a log axis needs a range above 0")
+        if (self.steps is None) == (self.values is None):
+            raise ValueError("give steps (values evenly spaced over the range) or values (listed), not both")
+        v = self.values
+        if v is not None and (v[0] != lo or v[-1] != hi or any(not b > a for a, b in zip(v, v[1:]))):
+            raise ValueError(f"values {v} must increase from the range's lower end ({lo:g}) to its upper ({hi:g})")
         return self
 
-    def values(self) -> list[float]:
+    @property
+    def count(self) -> int:
+        """The number of values sampled."""
+        return len(self.values) if self.values is not None else int(self.steps or 0)
+
+    def samples(self) -> list[float]:
+        """The values sampled, increasing."""
+        if self.values is not None:
+            return [float(v) for v in self.values]
         lo, hi = self.range
         if self.scale == "log":
-            return [float(v) for v in np.geomspace(lo, hi, self.steps)]
-        return [float(v) for v in np.linspace(lo, hi, self.steps)]
+            return [float(v) for v in np.geomspace(lo, hi, self.count)]
+        return [float(v) for v in np.linspace(lo, hi, self.count)]
 
-    def to_unit(self, v, dtype=np.float64):
-        """Values (any array shape) as coordinates in [0, 1] over the range (outside it: beyond)."""
+    def even(self, v, dtype=np.float64):
+        """Values on the range's scale: 0 at its lower end, 1 at its upper (evenly in the value or in
+        its logarithm; outside the range: beyond)."""
         lo, hi = self.range
         v = np.asarray(v, dtype=dtype)
         if self.scale == "log":
@@ -65,7 +86,20 @@ class Axis(Strict):
                                                                                              math.log(lo)))
         return (v - dtype(lo)) * dtype(1.0 / (hi - lo))
 
-    def from_unit(self, t):
+    def to_unit(self, v, dtype=np.float64):
+        """Values (any array shape) as the map's coordinates: the k-th sampled value at k / (count - 1),
+        linear between (in the value or its logarithm); beyond the range, the end step's slope."""
+        t = self.even(v, dtype)
+        if self.values is None:
+            return t
+        knots = self.even(np.asarray(self.values, np.float64), np.float64)
+        n = len(knots)
+        i = np.clip(np.searchsorted(knots.astype(dtype), t, side="right") - 1, 0, n - 2)
+        scale = (1.0 / ((n - 1) * np.diff(knots))).astype(dtype)  # coordinate per unit of t, each step
+        return (i * dtype(1.0 / (n - 1)) + (t - knots.astype(dtype)[i]) * scale[i]).astype(dtype, copy=False)
+
+    def sample(self, t):
+        """The value at ``t`` in [0, 1] of the range, evenly spaced as `scale` says (random draws)."""
         lo, hi = self.range
         t = np.asarray(t, dtype=np.float64)
         if self.scale == "log":
@@ -127,7 +161,7 @@ class TableSpec(Strict):
         shared = sorted(set(self.axes) & set(self.source.params))
         if shared:
             raise ValueError(f"axes.{shared[0]}: also given in source.params: an axis's values come from the grid")
-        n = math.prod(a.steps ** 3 if a.mode == "channels" else a.steps for a in self.axes.values())
+        n = math.prod(a.count ** 3 if a.mode == "channels" else a.count for a in self.axes.values())
         if n > MAX_POINTS:
             raise ValueError(f"axes: {n} points, at most {MAX_POINTS} in one table")
         return self
@@ -177,10 +211,10 @@ class Layout:
         """Every grid point: its index along each dimension, and its axis values (RGB as triples)."""
         dims = self.dims
         out = []
-        for idx in itertools.product(*(range(self.axes[d.axis].steps) for d in dims)):
+        for idx in itertools.product(*(range(self.axes[d.axis].count) for d in dims)):
             values: dict[str, Any] = {}
             for d, i in zip(dims, idx):
-                v = self.axes[d.axis].values()[i]
+                v = self.axes[d.axis].samples()[i]
                 if d.channel is not None:
                     values.setdefault(d.axis, [0.0, 0.0, 0.0])[d.channel] = v
                 else:
@@ -203,7 +237,7 @@ class Layout:
         for row in unit:
             values: dict[str, Any] = {}
             for (name, c), t in zip(cols, row):
-                v = float(self.axes[name].from_unit(t))
+                v = float(self.axes[name].sample(t))
                 if c is None:
                     values[name] = v
                 else:
@@ -236,13 +270,18 @@ class Layout:
         axes (None: their mean), for a target parameter mapped channel by channel."""
         return np.stack(self.columns(values, channel), axis=-1)
 
-    def columns(self, values: dict[str, np.ndarray], channel: int | None, dtype=np.float64) -> list[np.ndarray]:
-        """`features`, a column (a contiguous array) per dimension."""
+    def columns(self, values: dict[str, np.ndarray], channel: int | None, dtype=np.float64,
+                even: tuple[bool, ...] = ()) -> list[np.ndarray]:
+        """`features`, a column (a contiguous array) per dimension; where ``even`` (by dimension) is
+        true, on its axis's range scale (`Axis.even`) instead of the map's coordinate (they differ
+        where values are listed)."""
         cols = []
-        for d in self.dims:
+        for k, d in enumerate(self.dims):
             v = np.asarray(values[d.axis])
             if self.kinds[d.axis] == "rgb":
                 v = v[..., d.channel] if d.channel is not None else (
                     v.mean(axis=-1) if channel is None else v[..., channel])
-            cols.append(np.ascontiguousarray(self.axes[d.axis].to_unit(v, dtype)))
+            ax = self.axes[d.axis]
+            on_range = k < len(even) and even[k]
+            cols.append(np.ascontiguousarray(ax.even(v, dtype) if on_range else ax.to_unit(v, dtype)))
         return cols

@@ -22,12 +22,14 @@ from .maps import Grid, Regressor, build
 from .outputs import ERROR, Output, assemble, target_value
 from .spec import Layout, TableSpec
 
-TABLE_SCHEMA_VERSION = 4
+TABLE_SCHEMA_VERSION = 5
 """2: an output the channels share is looked up at each channel's grey level and weighted (was: at the
 mean grey level); a table of 1 is built again into its folder, which reuses its fits. 3: coloured
 points and maps corrected by them (`colours`); a table of 2 has neither and is read as it is. 4: path
-following along axes of the grid (`spec.follow`); tables of 2 and 3 have none and are read as they are."""
-READS = (2, 3, 4)
+following along axes of the grid (`spec.follow`); tables of 2 and 3 have none and are read as they are.
+5: an axis's values may be listed (`values`, closer together where the map bends); earlier tables have
+evenly spaced ones and are read as they are."""
+READS = (2, 3, 4, 5)
 
 
 class PointRecord(Strict):
@@ -136,6 +138,9 @@ class Table(WithDerived):
             del doc["colours"], doc["spec"]["colours"]
         if not doc["spec"]["follow"]:  # nor had 3 path following
             del doc["spec"]["follow"]
+        for ax in doc["spec"]["axes"].values():  # nor 4 listed values
+            if ax["values"] is None:
+                del ax["values"]
         for c in doc["candidates"].values():
             if c["correction"] is None:
                 del c["correction"], c["correction_cv"]
@@ -147,7 +152,7 @@ class Table(WithDerived):
 
     @property
     def shape(self) -> tuple[int, ...]:
-        return tuple(self.spec.axes[d.axis].steps for d in self.layout.dims)
+        return tuple(self.spec.axes[d.axis].count for d in self.layout.dims)
 
 
 def grid_of(table: Table, output: Output) -> Grid:

@@ -53,6 +53,68 @@ def test_channels_mode_makes_three_dimensions():
     assert len(layout.grid()) == 2 * 27
 
 
+@pytest.mark.parametrize("scale", ["linear", "log"])
+def test_listed_values_are_the_grid_and_the_map_interpolates_between_them(scale):
+    """An axis's values listed (closer at the dark end): the grid takes them, the map's coordinate
+    puts the k-th at k / (n - 1), evenly between two (in the value or its log) and on the end
+    step's slope beyond; the held-out draws stay even over the range, as with steps."""
+    listed = Axis(range=(0.05, 0.9), values=[0.05, 0.15, 0.25, 0.9], scale=scale)
+    even = Axis(range=(0.05, 0.9), steps=4, scale=scale)
+    assert listed.count == 4 and listed.samples() == [0.05, 0.15, 0.25, 0.9]
+    assert np.allclose(listed.to_unit(np.array(listed.samples())), [0, 1 / 3, 2 / 3, 1])
+    mid = np.sqrt(0.15 * 0.25) if scale == "log" else 0.2
+    assert listed.to_unit(mid) == pytest.approx(0.5)
+    beyond = listed.to_unit(np.array([0.9 * 1.1, 0.05 / 1.1 if scale == "log" else 0.04]))
+    assert beyond[0] > 1 and beyond[1] < 0
+    x = np.linspace(0.04, 0.95, 200)
+    assert np.all(np.diff(listed.to_unit(x)) > 0) and listed.to_unit(x, np.float32).dtype == np.float32
+    assert np.allclose(listed.sample(np.linspace(0, 1, 7)), even.sample(np.linspace(0, 1, 7)))
+    layout = Layout({"a": listed}, {"a": "rgb"})
+    assert [v["a"] for _, v in layout.grid()] == [[v] * 3 for v in [0.05, 0.15, 0.25, 0.9]]
+    # A value the grid's multilinear map reproduces exactly: linear in the coordinate between knots.
+    grid = Grid(listed.to_unit(np.array(listed.samples()))[:, None], np.arange(4)[:, None],
+                np.array([1.0, 2.0, 4.0, 5.0]), np.ones(4, bool), (4,))
+    assert Multilinear(grid).predict(np.array([[listed.to_unit(mid)]]))[0] == pytest.approx(3.0)
+
+
+@pytest.mark.parametrize("listed", [[0.3, 0.3875, 0.475, 1.0], [0.3, 0.399, 0.5, 1.0]])
+def test_a_map_over_listed_values_is_looked_up_texel_by_texel_as_one_by_one(tmp_path, listed):
+    """The multilinear map baked for textures keeps its exactness: listed values that fall on a
+    division of the range (1/8, 1/4) are among nodes evenly spaced on it, others (99/700) among nodes
+    evenly spaced in the map's coordinate, which a texel's value is first mapped to."""
+    from brdfremap.core.tables.build import fit_candidates
+    from brdfremap.core.tables.dense import DenseMap
+
+    table = synthetic_table(tmp_path, axes={"alpha": SPEC["axes"]["alpha"],
+                                            "specular_reflectance": {"range": [0.3, 1.0], "values": listed}})
+    bent = [pt.model_copy(update={"used": True, "params": {**pt.params, "specular_reflectance": [
+        c ** 3 for c in pt.values["specular_reflectance"]]}}) for pt in table.points]
+    table = table.model_copy(update={"points": bent})
+    tmap = TableMap(table.model_copy(update={"candidates": fit_candidates(table)}), "multilinear")
+    rng = np.random.default_rng(1)
+    values = {"alpha": rng.uniform(0.05, 0.4, 500), "specular_reflectance": rng.uniform(0.3, 1.0, (500, 3))}
+    one = tmap.predict(values)["specular_reflectance"]
+    dense = DenseMap(tmap)
+    many = dense.predict({k: v.astype(np.float32) for k, v in values.items()})["specular_reflectance"]
+    assert dense.even == (True, listed[1] == 0.3875) and many == pytest.approx(one, rel=1e-5)
+    grey = np.array(listed)[:, None].repeat(3, axis=1)
+    at_grid = tmap.predict({"alpha": np.full(4, 0.05), "specular_reflectance": grey})["specular_reflectance"]
+    assert at_grid == pytest.approx(grey ** 3, rel=1e-9)
+
+
+@pytest.mark.parametrize("axis, words", [
+    ({"range": [0.05, 0.9], "steps": 3, "values": [0.05, 0.5, 0.9]}, "not both"),
+    ({"range": [0.05, 0.9]}, "give steps"),
+    ({"range": [0.05, 0.9], "values": [0.1, 0.5, 0.9]}, "lower end (0.05)"),
+    ({"range": [0.05, 0.9], "values": [0.05, 0.5, 0.4, 0.9]}, "must increase"),
+])
+def test_listed_values_are_checked_against_the_range(tmp_path, axis, words):
+    with pytest.raises(ConfigError) as e:
+        load_table_spec(_spec(tmp_path, axes={"alpha": {"range": [0.05, 0.4], "steps": 4},
+                                              "specular_reflectance": axis}))
+    assert "axes.specular_reflectance" in str(e.value) and words in str(e.value), str(e.value)
+
+
 @pytest.mark.parametrize("change, words", [
     ({"axes": {"alpha": {"range": [0, 0.4], "steps": 4, "scale": "log"}}}, ["axes.alpha", "above 0"]),
     ({"axes": {"alpha": {"range": [0.4, 0.1], "steps": 4}}}, ["axes.alpha", "lower first"]),
@@ -383,13 +445,16 @@ def test_coloured_points_correct_a_map_where_the_target_couples_the_channels(tmp
     assert not any(c.correction for c in fit_candidates(unshared).values())
 
 
-@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("version", [2, 3, 4])
 def test_a_table_of_an_earlier_format_is_read_as_it_is(tmp_path, version):
-    """Format 3 added coloured points, format 4 path following: a file of 2 or 3 has none of the
-    later fields, and keeps its digest."""
+    """Format 3 added coloured points, 4 path following, 5 listed values: a file of 2, 3 or 4 has
+    none of the later fields, and keeps its digest."""
     table = synthetic_table(tmp_path).model_copy(update={"schema_version": version})
     doc = json.loads(write_table(tmp_path / "t.json", table).read_text())
-    del doc["spec"]["follow"]  # what formats 2 and 3 wrote
+    for ax in doc["spec"]["axes"].values():  # what formats 2 to 4 wrote
+        del ax["values"]
+    if version < 4:
+        del doc["spec"]["follow"]
     if version == 2:
         del doc["colours"], doc["spec"]["colours"]
         for c in doc["candidates"].values():
@@ -427,7 +492,7 @@ def test_path_following_refits_each_step_from_its_predecessor_as_it_now_stands(t
     registry = collect_adapters()
     p = plan(load_table_spec(_spec(tmp_path, follow=[axis])), "spec.yaml", registry)
     d = [dim.axis for dim in p.layout.dims].index(axis)
-    n, lines = p.spec.axes[axis].steps, len(p.grid) // p.spec.axes[axis].steps
+    n, lines = p.spec.axes[axis].count, len(p.grid) // p.spec.axes[axis].count
     first = [PointRecord(id=f"g{k}", index=list(i), values=v, params={"alpha": 0.1}, error=0.06, verdict="ok",
                          used=True) for k, (i, v) in enumerate(p.grid)]
     line = [tuple(pt.index[:d] + pt.index[d + 1:]) for pt in first]
