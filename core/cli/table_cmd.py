@@ -64,7 +64,9 @@ def show(args: argparse.Namespace) -> int:
 def _summary(t) -> None:
     s, b = t.spec, t.build
     axes = " x ".join(f"{n} {a.count}" + (" per channel" if a.mode == "channels" and t.source_kinds[n] == "rgb"
-                                            else "") for n, a in s.axes.items())
+                                            else "")
+                      + (f" ({', '.join(f'{v:g}' for v in a.values)})" if a.values is not None else "")
+                      for n, a in s.axes.items())
     print(f"table          {t.name}: {s.source.adapter}:{s.source.model} -> {s.target.adapter}:{s.target.model}")
     print(f"grid           {axes} = {b.points} points; mapped: "
           f"{', '.join(dict.fromkeys(o.param for o in t.outputs if o.kind != 'error'))}")

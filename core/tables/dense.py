@@ -56,7 +56,7 @@ class DenseMap:
         self.tmap, self.table = tmap, tmap.table
         want = nodes or NODES.get(len(self.table.shape), 11)
         layout = self.table.layout
-        axes, self.even = zip(*(_nodes(layout.axes[d.axis], want) for d in layout.dims))
+        axes = [_nodes(layout.axes[d.axis], want) for d in layout.dims]
         self.shape = tuple(len(a) for a in axes)
         grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, len(axes))
         self.luts = {o.label: tmap.regressors[o.label].predict(grid).astype(np.float32).reshape(self.shape)
@@ -84,7 +84,7 @@ class DenseMap:
 
         def at(channel: int | None) -> _Cells:
             if channel not in cells:
-                cells[channel] = _Cells(layout.columns(values, channel, np.float32, self.even), self.shape)
+                cells[channel] = _Cells(layout.columns(values, channel, np.float32), self.shape)
             return cells[channel]
 
         outputs = [o for o in self.table.outputs if errors or o.kind != "error"]
@@ -95,19 +95,18 @@ class DenseMap:
                         self.tmap.corrector(values, np.float32))
 
 
-def _nodes(axis: Axis, want: int) -> tuple[np.ndarray, bool]:
-    """The baked grid's nodes along an axis, as the map's coordinates, with each of the axis's own
-    values among them (a multilinear map is then baked exactly), and whether they are evenly spaced
-    on the axis's range (`Axis.even`): a texel's cell is then found without mapping its value to the
-    map's coordinate first (a tenth of a second on a 2048² colour map). So they are for evenly spaced
-    values, and for listed ones that fall on a division of the range into at most four times
-    ``want`` steps; other listed values take nodes evenly spaced in the map's coordinate."""
-    knots = axis.even(np.asarray(axis.samples(), np.float64))
-    for m in range(want - 1, 4 * (want - 1) + 1):
-        if np.allclose(knots * m, np.round(knots * m), rtol=0, atol=1e-9):
-            return axis.to_unit(axis.sample(np.linspace(0.0, 1.0, m + 1))), True
+def _nodes(axis: Axis, want: int) -> np.ndarray:
+    """The baked grid's nodes along an axis (coordinates, evenly spaced), with each of the axis's
+    own values on a node, so that a multilinear map is baked exactly: for evenly spaced values, the
+    first multiple of their steps from ``want`` nodes up; for listed ones, the first division of the
+    range from there up to twice as many steps that puts each on a node. Listed values that fall on
+    none lie between nodes, and the bake rounds the map's bend there off over one node's spacing."""
     s = axis.count
-    return np.linspace(0.0, 1.0, (s - 1) * max(1, -(-(want - 1) // (s - 1))) + 1), False
+    if axis.values is None:
+        return np.linspace(0.0, 1.0, (s - 1) * max(1, -(-(want - 1) // (s - 1))) + 1)
+    knots, low = axis.knots(), max(want - 1, s - 1)
+    aligned = (m for m in range(low, 2 * low + 1) if np.allclose(knots * m, np.round(knots * m), rtol=0, atol=1e-9))
+    return np.linspace(0.0, 1.0, next(aligned, low) + 1)
 
 
 def _decode(output, t: np.ndarray) -> np.ndarray:

@@ -36,9 +36,11 @@ class Grid:
     y: np.ndarray
     used: np.ndarray
     shape: tuple[int, ...]
+    knots: tuple[np.ndarray, ...] | None = None
+    """Each dimension's grid values as coordinates (None: evenly spaced from 0 to 1)."""
 
     def subset(self, keep: np.ndarray) -> "Grid":
-        return Grid(self.x, self.idx, self.y, self.used & keep, self.shape)
+        return Grid(self.x, self.idx, self.y, self.used & keep, self.shape, self.knots)
 
 
 class Multilinear:
@@ -51,17 +53,17 @@ class Multilinear:
         values = np.full(grid.shape, np.nan)
         values[tuple(grid.idx[grid.used].T)] = grid.y[grid.used]
         self.values = fill(values)
+        self.knots = grid.knots or tuple(np.linspace(0.0, 1.0, n) for n in grid.shape)
 
     def predict(self, x: np.ndarray) -> np.ndarray:
         x = np.clip(np.asarray(x, np.float64), 0.0, 1.0)
         out = np.zeros(len(x))
         # The cell of each point and its weights along each axis, then the 2^d corners summed.
         lo, w = [], []
-        for d, n in enumerate(self.values.shape):
-            pos = x[:, d] * (n - 1)
-            i = np.minimum(np.floor(pos).astype(int), n - 2)
+        for d, k in enumerate(self.knots):
+            i = np.clip(np.searchsorted(k, x[:, d], side="right") - 1, 0, len(k) - 2)
             lo.append(i)
-            w.append(pos - i)
+            w.append((x[:, d] - k[i]) / (k[i + 1] - k[i]))
         for corner in itertools.product((0, 1), repeat=len(lo)):
             weight = np.ones(len(x))
             for d, c in enumerate(corner):

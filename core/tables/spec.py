@@ -3,10 +3,10 @@ remapped point by point to a target model, from which a smooth map is learnt (Sz
 JCGT 2019).
 
 An axis is a source parameter. A scalar one is sampled at `steps` values over its range (evenly,
-or evenly in its logarithm); an RGB one either as a grey level (`mode: scale`: the map is then
-applied channel by channel, the paper's separable form, which holds where each image channel
-depends on its own component alone) or over the colour cube (`mode: channels`: three axes, a
-full regression, steps³ points)."""
+or evenly in its logarithm) or at the `values` listed; an RGB one either as a grey level
+(`mode: scale`: the map is then applied channel by channel, the paper's separable form, which holds
+where each image channel depends on its own component alone) or over the colour cube
+(`mode: channels`: three axes, a full regression, n³ points)."""
 
 from __future__ import annotations
 
@@ -45,7 +45,7 @@ class Axis(Strict):
     mode: Literal["scale", "channels"] = Field(
         "scale", description="RGB parameters only. scale: sampled as grey levels, the map applied to each channel "
                              "alone (the separable form; needs a separable parameter); channels: each channel an "
-                             "axis of its own (a full regression over the colour cube, steps³ points).")
+                             "axis of its own (a full regression over the colour cube, n³ points).")
 
     @model_validator(mode="after")
     def _check(self) -> "Axis":
@@ -54,11 +54,19 @@ class Axis(Strict):
             raise ValueError("range must be two finite numbers, the lower first")
         if self.scale == "log" and lo <= 0:
             raise ValueError("a log axis needs a range above 0")
-        if (self.steps is None) == (self.values is None):
-            raise ValueError("give steps (values evenly spaced over the range) or values (listed), not both")
+        if self.steps is None and self.values is None:
+            raise ValueError("give steps (values evenly spaced over the range) or values (listed)")
+        if self.steps is not None and self.values is not None:
+            raise ValueError("give steps or values, not both")
         v = self.values
-        if v is not None and (v[0] != lo or v[-1] != hi or any(not b > a for a, b in zip(v, v[1:]))):
-            raise ValueError(f"values {v} must increase from the range's lower end ({lo:g}) to its upper ({hi:g})")
+        if v is not None:
+            if v[0] != lo or v[-1] != hi:
+                raise ValueError(f"values: {v[0]:g} to {v[-1]:g}; they must begin and end at the range's ends "
+                                 f"({lo:g}, {hi:g})")
+            bad = next((k for k in range(1, len(v)) if not v[k] > v[k - 1]), None)
+            if bad is not None:
+                raise ValueError(f"values: {v[bad]:g} (number {bad + 1}) is not above {v[bad - 1]:g}; they must "
+                                 "increase")
         return self
 
     @property
@@ -75,9 +83,9 @@ class Axis(Strict):
             return [float(v) for v in np.geomspace(lo, hi, self.count)]
         return [float(v) for v in np.linspace(lo, hi, self.count)]
 
-    def even(self, v, dtype=np.float64):
-        """Values on the range's scale: 0 at its lower end, 1 at its upper (evenly in the value or in
-        its logarithm; outside the range: beyond)."""
+    def to_unit(self, v, dtype=np.float64):
+        """Values (any array shape) on the range's scale: 0 at its lower end, 1 at its upper, evenly
+        in the value or in its logarithm (outside the range: beyond). The maps' coordinate."""
         lo, hi = self.range
         v = np.asarray(v, dtype=dtype)
         if self.scale == "log":
@@ -86,17 +94,9 @@ class Axis(Strict):
                                                                                              math.log(lo)))
         return (v - dtype(lo)) * dtype(1.0 / (hi - lo))
 
-    def to_unit(self, v, dtype=np.float64):
-        """Values (any array shape) as the map's coordinates: the k-th sampled value at k / (count - 1),
-        linear between (in the value or its logarithm); beyond the range, the end step's slope."""
-        t = self.even(v, dtype)
-        if self.values is None:
-            return t
-        knots = self.even(np.asarray(self.values, np.float64), np.float64)
-        n = len(knots)
-        i = np.clip(np.searchsorted(knots.astype(dtype), t, side="right") - 1, 0, n - 2)
-        scale = (1.0 / ((n - 1) * np.diff(knots))).astype(dtype)  # coordinate per unit of t, each step
-        return (i * dtype(1.0 / (n - 1)) + (t - knots.astype(dtype)[i]) * scale[i]).astype(dtype, copy=False)
+    def knots(self) -> np.ndarray:
+        """The sampled values' coordinates (`to_unit`): evenly spaced from 0 to 1 unless listed."""
+        return self.to_unit(np.asarray(self.samples(), np.float64))
 
     def sample(self, t):
         """The value at ``t`` in [0, 1] of the range, evenly spaced as `scale` says (random draws)."""
@@ -270,18 +270,17 @@ class Layout:
         axes (None: their mean), for a target parameter mapped channel by channel."""
         return np.stack(self.columns(values, channel), axis=-1)
 
-    def columns(self, values: dict[str, np.ndarray], channel: int | None, dtype=np.float64,
-                even: tuple[bool, ...] = ()) -> list[np.ndarray]:
-        """`features`, a column (a contiguous array) per dimension; where ``even`` (by dimension) is
-        true, on its axis's range scale (`Axis.even`) instead of the map's coordinate (they differ
-        where values are listed)."""
+    def knots(self) -> tuple[np.ndarray, ...]:
+        """Each dimension's grid values as coordinates (`Axis.knots`)."""
+        return tuple(self.axes[d.axis].knots() for d in self.dims)
+
+    def columns(self, values: dict[str, np.ndarray], channel: int | None, dtype=np.float64) -> list[np.ndarray]:
+        """`features`, a column (a contiguous array) per dimension."""
         cols = []
-        for k, d in enumerate(self.dims):
+        for d in self.dims:
             v = np.asarray(values[d.axis])
             if self.kinds[d.axis] == "rgb":
                 v = v[..., d.channel] if d.channel is not None else (
                     v.mean(axis=-1) if channel is None else v[..., channel])
-            ax = self.axes[d.axis]
-            on_range = k < len(even) and even[k]
-            cols.append(np.ascontiguousarray(ax.even(v, dtype) if on_range else ax.to_unit(v, dtype)))
+            cols.append(np.ascontiguousarray(self.axes[d.axis].to_unit(v, dtype)))
         return cols

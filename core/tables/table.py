@@ -162,7 +162,7 @@ def grid_of(table: Table, output: Output) -> Grid:
     x = layout.features(vals, None)
     y = np.array([target_value(p.params, p.error, output) for p in pts])
     used = np.array([p.used for p in pts]) & np.isfinite(y)
-    return Grid(x, np.array([p.index for p in pts], int), np.nan_to_num(y), used, table.shape)
+    return Grid(x, np.array([p.index for p in pts], int), np.nan_to_num(y), used, table.shape, layout.knots())
 
 
 class TableMap:
