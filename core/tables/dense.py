@@ -97,14 +97,12 @@ class DenseMap:
 
 def _nodes(axis: Axis, want: int) -> np.ndarray:
     """The baked grid's nodes along an axis (coordinates, evenly spaced), with each of the axis's
-    own values on a node, so that a multilinear map is baked exactly: for evenly spaced values, the
-    first multiple of their steps from ``want`` nodes up; for listed ones, the first division of the
-    range from there up to twice as many steps that puts each on a node. Listed values that fall on
-    none lie between nodes, and the bake rounds the map's bend there off over one node's spacing."""
-    s = axis.count
-    if axis.values is None:
-        return np.linspace(0.0, 1.0, (s - 1) * max(1, -(-(want - 1) // (s - 1))) + 1)
-    knots, low = axis.knots(), max(want - 1, s - 1)
+    own values on a node, so that a multilinear map is baked exactly: the first division of the
+    range from ``want`` nodes (or the axis's own count) up to twice as many steps that puts each on
+    a node, which evenly spaced values always find (a multiple of their steps). Listed values that
+    fall on none lie between nodes, and the bake rounds the map's bend there off over one node's
+    spacing."""
+    knots, low = axis.knots(), max(want - 1, axis.count - 1)
     aligned = (m for m in range(low, 2 * low + 1) if np.allclose(knots * m, np.round(knots * m), rtol=0, atol=1e-9))
     return np.linspace(0.0, 1.0, next(aligned, low) + 1)
 

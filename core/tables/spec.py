@@ -210,11 +210,12 @@ class Layout:
     def grid(self) -> list[tuple[tuple[int, ...], dict[str, Any]]]:
         """Every grid point: its index along each dimension, and its axis values (RGB as triples)."""
         dims = self.dims
+        samples = [self.axes[d.axis].samples() for d in dims]
         out = []
-        for idx in itertools.product(*(range(self.axes[d.axis].count) for d in dims)):
+        for idx in itertools.product(*(range(len(s)) for s in samples)):
             values: dict[str, Any] = {}
-            for d, i in zip(dims, idx):
-                v = self.axes[d.axis].samples()[i]
+            for d, s, i in zip(dims, samples, idx):
+                v = s[i]
                 if d.channel is not None:
                     values.setdefault(d.axis, [0.0, 0.0, 0.0])[d.channel] = v
                 else:
