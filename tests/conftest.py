@@ -55,3 +55,16 @@ def mitsuba_adapter():
 @pytest.fixture(scope="session")
 def cycles_adapter():
     yield from _open_adapter("brdfremap.adapters.cycles.adapter", "CyclesAdapter")
+
+
+CORPUS = ROOT.parent / "shared" / "corpus"
+"""Public material files the project did not write (their README says what): the acceptance test."""
+
+
+@pytest.fixture(scope="session")
+def corpus() -> Path:
+    if not (CORPUS / "README.md").is_file():
+        if os.environ.get("CI"):
+            pytest.fail(f"the corpus of public files must be beside the checkout in CI: {CORPUS}")
+        pytest.skip(f"the corpus of public files is not here: {CORPUS}")
+    return CORPUS

@@ -14,13 +14,16 @@ import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import numpy as np
+
 from brdfremap.core.errors import ConfigError
 from brdfremap.core.library.formats import Entry, clip_into
-from brdfremap.core.schemas import Material
-from brdfremap.core.textures import Texture, texture
+from brdfremap.core.schemas import Material, Value
+from brdfremap.core.textures import LUMA, Texture, read_values, texture
 
 from .blend import COMPONENTS, SLOTS
 from .models import MODELS
+from .spectra import read_spectrum
 
 NAMED_IOR = {"vacuum": 1.0, "helium": 1.00004, "hydrogen": 1.00013, "air": 1.000277, "carbon dioxide": 1.00045,
              "water": 1.3330, "acetone": 1.36, "ethanol": 1.361, "carbon tetrachloride": 1.461, "glycerol": 1.4729,
@@ -31,6 +34,8 @@ WRAPPERS = {"twosided": "two-sided (unwrapped)", "bumpmap": "its bump map is ign
             "normalmap": "its normal map is ignored", "mask": "its opacity mask is ignored"}
 NOT_YET = {"measured": "a measured BRDF", "hair": "hair",
            "pplastic": "polarized plastic", "polarizer": "a polarizer", "retarder": "a retarder", "null": "a null BSDF"}
+ALPHAS = MODELS["roughconductor"]
+"""Where alpha_u and alpha_v are described (for a model that reads them as one alpha)."""
 CONVERTED = {"principled": ("eta",)}
 """Properties read into another parameter of the model (below)."""
 IGNORED = {"sample_visible", "nonlinear"}
@@ -62,6 +67,10 @@ class _Document:
         self.root = _parse(path)
         if self.root.tag != "scene":
             raise ConfigError(f"the root element is <{self.root.tag}>, not <scene>: not a Mitsuba scene", file=str(path))
+        self.search = [path.parent]
+        """Where file names are looked up, as Mitsuba's file resolver does: the scene's folder, then
+        each `<path>` (relative to the file that gives it)."""
+        self._paths(self.root, path)
         self._inline(self.root, path, depth=0)
         defaults = {d.get("name", ""): d.get("value", "") for d in self.root.findall("default")}
         for elem in self.root.iter():
@@ -78,10 +87,24 @@ class _Document:
                 raise ConfigError("includes nest deeper than 8 (a loop?)", file=str(path))
             inc = path.parent / child.get("filename", "")
             sub = _parse(inc)
+            self._paths(sub, inc)
             self._inline(sub, inc, depth + 1)
             parent.remove(child)
             for j, e in enumerate(sub):
                 parent.insert(i + j, e)
+
+    def _paths(self, root: ET.Element, path: Path) -> None:
+        self.search += [path.parent / p.get("value", "") for p in root.findall("path")]
+
+    def find(self, name: str) -> Path:
+        """A file the scene names, found as Mitsuba finds it (the first search folder that has it);
+        a file found nowhere is a ConfigError naming the folders."""
+        for folder in self.search:
+            candidate = folder / name
+            if candidate.is_file():
+                return candidate.resolve()
+        where = ", ".join(str(f) for f in dict.fromkeys(self.search))
+        raise ConfigError(f"{name!r} is not found (looked in {where})", file=str(self.path))
 
     def bsdfs(self) -> list[tuple[ET.Element, str]]:
         """Every material of the scene: top-level BSDFs by id, anonymous ones inside shapes named
@@ -170,11 +193,15 @@ def _params(doc: _Document, elem: ET.Element, model: str, notes: list[str],
         name = prop.get("name", "")
         if prop.tag in ("texture", "ref"):
             textured.append(_texture(doc, prop, name))
-            tex = _bitmap(doc, prop, name, notes) if textures is not None and name in spec.texturable else None
-            if tex is not None:
-                textures[name] = tex
+            if name in spec.names or name in ("alpha_u", "alpha_v"):
+                constant, tex = _textured_input(doc, prop, name, ALPHAS if name not in spec.names else spec, notes,
+                                                textures is not None)
+                if constant is not None:
+                    (aniso if name in ("alpha_u", "alpha_v") else params)[name] = constant
+                if tex is not None:
+                    textures[name] = tex  # type: ignore[index]
             continue
-        value = _value(prop)
+        value = _value(doc, prop, name, notes)
         if name in ("alpha_u", "alpha_v"):
             aniso[name] = value
         elif name in ("int_ior", "ext_ior") and isinstance(value, str):
@@ -224,32 +251,36 @@ def _blend_params(doc: _Document, elem: ET.Element, notes: list[str]) -> tuple[d
         if prop.get("name") == "weight" and prop.tag in ("texture", "ref"):
             textured.append(_texture(doc, prop, "weight"))
         elif prop.get("name") == "weight":
-            params["weight"] = _value(prop)
+            params["weight"] = _value(doc, prop, "weight", notes)
     notes += clip_into(MODELS["blendbsdf"], params)
     return params, textured
 
 
-def _value(prop: ET.Element):
+def _value(doc: _Document, prop: ET.Element, name: str, notes: list[str]):
     v = prop.get("value", "")
-    if prop.tag in ("float", "integer"):
-        return float(v)
+    if prop.tag == "spectrum":
+        got = read_spectrum(prop, name, doc.find)
+        if got.note:
+            notes.append(got.note)
+        return got.rgb
+    try:
+        if prop.tag in ("float", "integer"):
+            return float(v)
+        if prop.tag in ("rgb", "color"):
+            return _colour(v)
+    except ValueError:
+        raise ConfigError(f"{name}: <{prop.tag} value={v!r}> is not a number or three (Mitsuba would not load it)") \
+            from None
     if prop.tag == "boolean":
         return "true" if v.strip().lower() in ("true", "1") else "false"
-    if prop.tag in ("rgb", "spectrum", "color"):
-        return _colour(prop.tag, v)
     return v
 
 
-def _colour(tag: str, text: str) -> tuple[float, float, float]:
-    t = text.strip()
-    if t.startswith("#") and len(t) == 7:
-        return tuple(int(t[i:i + 2], 16) / 255.0 for i in (1, 3, 5))  # type: ignore[return-value]
-    if ":" in t:  # wavelength:value pairs: their mean, as a grey (a spectrum has no RGB without a colour model)
-        vals = [float(p.split(":")[1]) for p in re.split(r"[,\s]+", t) if ":" in p]
-        m = sum(vals) / len(vals)
-        return (m, m, m)
-    vals = [float(x) for x in re.split(r"[,\s]+", t) if x]
-    return (vals[0],) * 3 if len(vals) == 1 else tuple(vals[:3])  # type: ignore[return-value]
+def _colour(text: str) -> tuple[float, float, float]:
+    vals = [float(x) for x in re.split(r"[,\s]+", text.strip()) if x]
+    if len(vals) not in (1, 3):
+        raise ValueError(text)
+    return (vals[0],) * 3 if len(vals) == 1 else tuple(vals)  # type: ignore[return-value]
 
 
 def _texture(doc: _Document, prop: ET.Element, name: str) -> str:
@@ -263,23 +294,59 @@ LINEAR_FILES = (".exr", ".hdr", ".pfm")
 """Image files Mitsuba reads as linear values; it decodes the others (PNG, JPEG...) as sRGB unless `raw`."""
 
 
-def _bitmap(doc: _Document, prop: ET.Element, name: str, notes: list[str]) -> Texture | None:
-    """A `bitmap` texture's file (relative to the scene's folder, as Mitsuba resolves it), how its
-    values are read and filtered; None (and a note) for another texture or a file not found."""
+def _textured_input(doc: _Document, prop: ET.Element, name: str, spec, notes: list[str],
+                    maps: bool) -> tuple[Value | None, Texture | None]:
+    """A textured input's constant (a bitmap's mean, a checkerboard's; None: the model's default) and,
+    when ``maps`` and the model takes it as an image laid as it is, its bitmap as a texture."""
     tex = doc.ref(prop) if prop.tag == "ref" else prop
+    kind = spec.param(name).kind
+    if tex.get("type") == "checkerboard":
+        colours = {c.get("name"): _value(doc, c, f"{name}.{c.get('name')}", notes) for c in tex
+                   if c.get("name") in ("color0", "color1")}
+        c0, c1 = (_rgb(colours.get(k, d)) for k, d in (("color0", 0.4), ("color1", 0.2)))
+        mean = tuple((a + b) / 2 for a, b in zip(c0, c1))
+        notes.append(f"{name}: a checkerboard texture is read as its mean, {_shown(mean)}")
+        return (mean if kind == "rgb" else float(np.dot(mean, LUMA))), None
+    image = _bitmap(doc, tex, name, notes)
+    if image is None:
+        return None, None
+    try:
+        values = read_values(image, kind, where=f"{name} of a BSDF in {doc.path}")
+    except ConfigError as exc:
+        notes.append(f"{name}: its image cannot be read ({exc}): read as the model's default")
+        return None, None
+    mean = tuple(float(x) for x in values.reshape(-1, 3).mean(axis=0)) if kind == "rgb" else float(values.mean())
+    plain = not any(t.get("name") == "to_uv" for t in tex if t.tag == "transform") and \
+        {s.get("name"): s.get("value", "") for s in tex.iter("string")}.get("wrap_mode", "repeat") == "repeat"
+    if maps and plain and name in spec.texturable:
+        return mean, image
+    why = "only an image laid as it is over the UV map is remapped texel by texel" if not plain else \
+        f"the {spec.name} model does not take {name} as an image" if name not in spec.texturable else ""
+    notes.append(f"{name}: its image is read as its mean, {_shown(mean)}" + (f" ({why})" if why else ""))
+    return mean, None
+
+
+def _rgb(v) -> tuple[float, float, float]:
+    return tuple(v) if isinstance(v, tuple) else (float(v),) * 3  # type: ignore[return-value]
+
+
+def _shown(v) -> str:
+    return "(" + ", ".join(f"{x:.4g}" for x in v) + ")" if isinstance(v, tuple) else f"{v:.4g}"
+
+
+def _bitmap(doc: _Document, tex: ET.Element, name: str, notes: list[str]) -> Texture | None:
+    """A `bitmap` texture's file (found as Mitsuba finds it), how its values are read and filtered;
+    None (and a note) for another texture or a file not found."""
     strings = {s.get("name"): s.get("value", "") for s in tex.iter("string")}
     if tex.get("type") != "bitmap" or not strings.get("filename"):
-        notes.append(f"{name}: a {tex.get('type', 'texture')} texture is read as its constant (only a bitmap's "
-                     "image is remapped texel by texel)")
+        notes.append(f"{name}: a {tex.get('type', 'texture')} texture is read as the model's default (only a bitmap's "
+                     "image or a checkerboard is read)")
         return None
-    if any(t.get("name") == "to_uv" for t in tex if t.tag == "transform") or \
-            strings.get("wrap_mode", "repeat") != "repeat":
-        notes.append(f"{name}: its bitmap is laid with a to_uv transform or a wrap mode: read as its constant "
-                     "(only an image laid as it is over the UV map is remapped texel by texel)")
-        return None
-    path = (doc.path.parent / strings["filename"]).resolve()
-    if not path.is_file():
-        notes.append(f"{name}: its image {strings['filename']!r} is not found beside the scene: read as its constant")
+    try:
+        path = doc.find(strings["filename"])
+    except ConfigError:
+        notes.append(f"{name}: its image {strings['filename']!r} is not found (beside the scene or in its <path>s): "
+                     "read as the model's default")
         return None
     raw = any(b.get("name") == "raw" and b.get("value", "").strip().lower() in ("true", "1") for b in tex.iter("boolean"))
     space = "linear" if raw or path.suffix.lower() in LINEAR_FILES else "srgb"
