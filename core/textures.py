@@ -115,6 +115,19 @@ def read_values(tex: Texture, kind: str, where: str = "") -> np.ndarray:
     return np.ascontiguousarray(px @ LUMA.astype(np.float32) if kind == "scalar" else px)
 
 
+def colour_to_linear(rgb: tuple[float, float, float], space: str, where: str = "") -> tuple[float, float, float]:
+    """One colour from a named colour space (OpenColorIO's built-in configuration knows MaterialX's
+    names: acescg, srgb_texture, lin_displayp3 ...) to linear Rec.709; an unknown space is a
+    ConfigError naming it."""
+    import OpenImageIO as oiio
+
+    if not oiio.ColorConfig("ocio://default").getColorSpaceIndex(space) >= 0:
+        raise ConfigError(f"colour space {space!r} is not known to OpenColorIO's built-in configuration"
+                          + (f" ({where})" if where else ""))
+    px = _convert(np.array([[rgb]], np.float32), space, LINEAR)
+    return tuple(float(x) for x in px[0, 0, :3])  # type: ignore[return-value]
+
+
 def _convert(px: np.ndarray, src: str, dst: str) -> np.ndarray:
     import OpenImageIO as oiio
 

@@ -5,13 +5,16 @@ read as the Cycles Principled BSDF by the correspondence in `correspondence.py`.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 from brdfremap.core.errors import ConfigError
 from brdfremap.core.library.formats import Entry, clip_into
 from brdfremap.core.schemas import Material
+from brdfremap.core.textures import colour_to_linear
 
 from .correspondence import HALF, SCALE, QUIET, TO_PRINCIPLED
+from .versions import upgrade_inputs
 
 NOTE = ("read as Blender Cycles' Principled BSDF by the {shader} correspondence (Blender's Principled BSDF "
         "follows OpenPBR): MaterialX has no renderer of its own here")
@@ -43,16 +46,18 @@ class MaterialXReader:
         m = mx()
         doc = m.createDocument()
         try:
-            m.readFromXmlFile(doc, str(path))  # upgrades an older document to this version
+            m.readFromXmlFile(doc, str(path))  # upgrades an older document's structure to this version
         except Exception as exc:  # the library's parse and file errors share no base class
             raise ConfigError(f"cannot read it as MaterialX: {str(exc).splitlines()[0]}", file=str(path)) from None
+        upgraded = {n.getName(): upgrade_inputs(n) for n in doc.getNodes() if n.getType() == "surfaceshader"}
         doc.importLibrary(standard_libraries())
         valid, why = doc.validate()
         if not valid:
-            raise ConfigError(f"is not valid MaterialX: {why.strip().splitlines()[0]}", file=str(path))
-        return [self._entry(m, mat, str(path)) for mat in doc.getMaterialNodes()]
+            first = why.strip().splitlines()[0]
+            raise ConfigError(f"is not valid MaterialX: {first}", file=str(path), field=_line_of(path, first))
+        return [self._entry(m, mat, str(path), upgraded) for mat in doc.getMaterialNodes()]
 
-    def _entry(self, m, mat, file: str) -> Entry:
+    def _entry(self, m, mat, file: str, upgraded: dict[str, list[str]]) -> Entry:
         name = mat.getName()
         shaders = [s for s in m.getShaderNodes(mat) if s.getType() == "surfaceshader"]
         if not shaders:
@@ -63,7 +68,7 @@ class MaterialXReader:
             return Entry(name=name, file=file, problem=f"shader {category!r} has no correspondence here (known: "
                                                         f"{', '.join(TO_PRINCIPLED)})")
         params, textured, notes = _principled(shader, category)
-        notes.insert(0, NOTE.format(shader=category))
+        notes[:0] = [NOTE.format(shader=category), *upgraded.get(shader.getName(), [])]
         textures = _textures(shader, category, name, notes)
         return Entry(name=name, file=file, notes=notes, textured=textured,
                      material=Material(adapter="cycles", model="principled", params=params, name=name,
@@ -84,9 +89,21 @@ def _principled(shader, category: str) -> tuple[dict, list[str], list[str]]:
                                 or inp.hasOutputString() or inp.hasInterfaceName()):
             textured.append(f"{name} <- {_source(inp)}")
             inp = None
-        got = inp.getValue() if inp is not None and inp.hasValueString() else nodedef.getActiveInput(name).getValue()
+        given = inp is not None and inp.hasValueString()
+        got = inp.getValue() if given else nodedef.getActiveInput(name).getValue()
+        if not hasattr(got, "asTuple"):
+            return _r(got)
         # MaterialX keeps 32-bit floats: 0.944 comes back as 0.94400000572; 7 digits are what was written.
-        return tuple(_r(x) for x in got.asTuple()) if hasattr(got, "asTuple") else _r(got)
+        rgb = tuple(_r(x) for x in got.asTuple())
+        space = inp.getActiveColorSpace() if given else ""
+        if given and inp.getType().startswith("color") and space not in ("", *WORKING):
+            linear = tuple(_r(x) for x in colour_to_linear(rgb, space, where=f"{shader.getName()}: {name}"))
+            notes.append(f"{name} ({', '.join(f'{x:.4g}' for x in rgb)}) is in {space}: read as "
+                         f"({', '.join(f'{x:.4g}' for x in linear)}) in linear Rec.709, the renderers' working space")
+            return linear
+        return rgb
+
+    notes: list[str] = []
 
     params: dict = {}
     for pname, names in TO_PRINCIPLED[category].items():
@@ -95,7 +112,7 @@ def _principled(shader, category: str) -> tuple[dict, list[str], list[str]]:
         if len(vals) == 2:  # a colour times its weight
             v = tuple(c * float(vals[1]) for c in v)
         params[pname] = v / 2.0 if pname in HALF else v * SCALE[pname] if pname in SCALE else v
-    notes = clip_into(PRINCIPLED, params) + _unused(shader, nodedef, used)
+    notes += clip_into(PRINCIPLED, params) + _unused(shader, nodedef, used)
     return params, textured, notes
 
 
@@ -151,6 +168,23 @@ def _unusable(shader, node, pname: str, inputs: tuple[str, ...]) -> str:
         if tiles is not None and tiles.hasValueString() and tiles.getValueString().replace(" ", "") not in ("1,1",):
             return "its image is tiled"
     return ""
+
+
+WORKING = ("lin_rec709", "lin_srgb")
+"""MaterialX's names for linear Rec.709, the space both renderers' RGB values are in."""
+
+
+def _line_of(path: Path, message: str) -> str | None:
+    """'line N' of the element a MaterialX message names (`name="..."`), or None."""
+    found = re.search(r'name="([^"]+)"', message)
+    if not found:
+        return None
+    try:
+        lines = path.read_text(errors="replace").splitlines()
+    except OSError:
+        return None
+    key = f'name="{found.group(1)}"'
+    return next((f"line {i}" for i, line in enumerate(lines, 1) if key in line), None)
 
 
 def _r(x) -> float:

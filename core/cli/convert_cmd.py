@@ -42,7 +42,7 @@ def run(args: argparse.Namespace) -> int:
     registry, formats = collect_adapters(pm), collect_formats(pm)
     dest = Destination.parse(args.to, registry)
     scene, settings = options.scene_from(args), options.settings_from(args)
-    entries = read_all(expand_inputs(args.inputs, formats), formats)
+    entries = read_all(expand_inputs(args.inputs, formats), formats, keep_going=True)
     if args.only:
         missing = set(args.only) - {e.name for e in entries}
         if missing:

@@ -64,7 +64,7 @@ class Item:
     @property
     def status(self) -> str:
         if self.entry.problem:
-            return "unsupported"
+            return "failed" if self.entry.unreadable else "unsupported"
         if self.failure or (self.done is not None and self.done.report is None):
             return "failed"
         return self.done.report.verdict if self.done is not None else "pending"

@@ -26,6 +26,8 @@ class Entry(Strict):
     file: str = Field(description="The file it was read from.")
     material: Material | None = Field(None, description="The source material; None when it cannot be converted.")
     problem: str = Field("", description="Why it cannot be converted (an unsupported type).")
+    unreadable: bool = Field(False, description="The file itself could not be read (``problem`` says where and "
+                                                "why): a failure, where an unsupported type is not.")
     notes: list[str] = Field(default_factory=list, description="What the reading changed or left out: inputs with "
                                                                "no counterpart, a correspondence used.")
     textured: list[str] = Field(default_factory=list, description="Inputs driven by a texture or a node graph, "
@@ -124,15 +126,23 @@ def expand_inputs(paths: list[str], formats: Formats) -> list[Path]:
     return list(dict.fromkeys(out))
 
 
-def read_all(paths: list[Path], formats: Formats) -> list[Entry]:
-    """Every material of every file, names made unique (a second 'gold' becomes 'file/gold')."""
+def read_all(paths: list[Path], formats: Formats, *, keep_going: bool = False) -> list[Entry]:
+    """Every material of every file, names made unique (a second 'gold' becomes 'file/gold'). A file
+    no reader knows is a ConfigError; so is a file that cannot be read, unless ``keep_going``: then
+    it is one unreadable entry (named after the file) whose problem is the error, and the other
+    files are read all the same."""
     entries: list[Entry] = []
     for p in paths:
         reader = formats.reader_for(p)
         if reader is None:
             raise ConfigError(f"no reader for this kind of file (known endings: {', '.join(sorted(formats.suffixes))})",
                               file=str(p))
-        entries += reader.read(p)
+        try:
+            entries += reader.read(p)
+        except ConfigError as exc:
+            if not keep_going:
+                raise
+            entries.append(Entry(name=p.stem, file=str(p), problem=str(exc), unreadable=True))
     return _unique(entries)
 
 

@@ -103,3 +103,36 @@ def test_a_folder_reads_the_materials_it_holds_and_names_stay_unique(tmp_path, f
         expand_inputs([str(tmp_path / "nope.xml")], formats)
     with pytest.raises(ConfigError, match="no reader for this kind of file"):
         read_all([tmp_path / "notes.txt"], formats)
+
+
+def test_openpbr_before_1_0_is_read_with_its_renames_noted(formats):
+    """A published MaterialX 1.38 document (OpenPBR's own brushed aluminium) with OpenPBR's pre-1.0
+    input names: read, each rename and left-out input noted."""
+    got = _read(formats, DATA / "openpbr" / "open_pbr_aluminum_brushed.mtlx")["Aluminum_Brushed"]
+    assert got.material.params["anisotropic"] == pytest.approx(1.0)  # 0.9 / 0.9: its anisotropy, renamed
+    assert any("specular_anisotropy is read as specular_roughness_anisotropy" in n for n in got.notes)
+    assert any(n.startswith("specular_rotation = 0.25 is left out") for n in got.notes)
+
+
+def test_materialx_colours_are_read_from_their_colour_space(formats):
+    """OpenPBR's examples are in ACEScg: a colour is turned into linear Rec.709 as MaterialX's own
+    acescg_to_lin_rec709 does (the matrix of its colour-management library)."""
+    banana = _read(formats, DATA / "openpbr" / "open_pbr_banana.mtlx")["Banana"]
+    assert banana.material.params["base_color"] == pytest.approx((0.6350, 0.5314, 0.1112), abs=2e-4)
+    assert any("is in acescg" in n for n in banana.notes)
+    copper = _read(formats, DATA / "openpbr" / "open_pbr_copper.mtlx")["Copper"]  # lin_rec709: as written
+    assert copper.material.params["base_color"] == (0.988, 0.688, 0.448)
+    assert not any("colour space" in n or "is in " in n for n in copper.notes)
+
+
+def test_a_file_that_cannot_be_read_is_listed_and_the_others_are_read(tmp_path, formats):
+    bad = tmp_path / "a_broken.mtlx"
+    bad.write_text('<?xml version="1.0"?>\n<materialx version="1.39">\n  <open_pbr_surface name="s" type="surfaceshader">\n'
+                   '    <input name="no_such_input" type="float" value="1" />\n  </open_pbr_surface>\n</materialx>\n')
+    paths = [bad, DATA / "openpbr" / "open_pbr_tire.mtlx"]
+    with pytest.raises(ConfigError, match="a_broken.mtlx"):
+        read_all(paths, formats)
+    got = {e.name: e for e in read_all(paths, formats, keep_going=True)}
+    assert got["a_broken"].unreadable and "line 3" in got["a_broken"].problem and "no_such_input" in \
+        got["a_broken"].problem
+    assert got["Tire"].material is not None
