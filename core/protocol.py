@@ -44,6 +44,10 @@ class Adapter(abc.ABC):
     calibration: ClassVar[tuple[str, dict] | None] = None
     """A white diffuse material of albedo 0.8 (model, params), which `remap check` renders against
     the analytic radiance; None: the adapter has none to offer."""
+    glasses: ClassVar[dict[str, tuple[str, dict]]] = {}
+    """Clear glasses of IOR 1.5 (model, params) by kind: "smooth" (perfectly smooth), "rough" (GGX,
+    α 0.1). An adapter that declares them renders light through a sphere (`ModelSpec.transmits`);
+    `remap check` and the verdict compare them with another adapter's."""
     """The light types of `core.scene` this adapter realises, in the same units and orientation
     as every other (its calibration tests cover each)."""
 

@@ -14,6 +14,11 @@ from .textures import Texture
 
 Value = float | tuple[float, float, float] | str
 LOBES = ("diffuse", "specular")
+TRANSMISSION_DEPTH = 12
+"""The longest light path (segments from the camera, Mitsuba's `max_depth`) an adapter traces for a
+transmissive material: in, through, out, and the internal reflections that matter (each keeps a
+few percent). Every adapter renders opaque materials with direct light alone (a convex sphere
+lights nothing of itself)."""
 
 
 class ParamSpec(_Strict):
@@ -147,6 +152,10 @@ class ModelSpec(_Strict):
     smooth: bool = Field(False, description="Its reflection is perfectly smooth (a mirror, a smooth glass): a point "
                                             "light shows in it as a point at most, so it is seen, and fitted, "
                                             "under an environment.")
+    transmits: bool = Field(False, description="Light passes through it (a glass): adapters render it with paths "
+                                               "deep enough to enter the sphere and leave it (`TRANSMISSION_DEPTH`).")
+    transmits_with: str | None = Field(None, description="The parameter whose positive value lets light through "
+                                                         "(a transmission weight): the model transmits then.")
     complex_ior: tuple[str, str] | None = Field(None, description="A conductor's complex IOR: the names of its "
                                                                   "real and imaginary parts (eta, k), which tables "
                                                                   "map as reflectivity and edge tint.")
@@ -168,6 +177,9 @@ class ModelSpec(_Strict):
         for n in self.texturable:
             if n not in names or self.param(n).kind == "choice":
                 raise ValueError(f"model {self.name!r}: texturable {n!r} is not a numeric parameter")
+        if self.transmits_with is not None and (self.transmits_with not in names
+                                                or self.param(self.transmits_with).kind != "scalar"):
+            raise ValueError(f"model {self.name!r}: transmits_with {self.transmits_with!r} is not a scalar parameter")
         for n in self.complex_ior or ():
             if n not in names or self.param(n).kind != "rgb":
                 raise ValueError(f"model {self.name!r}: complex_ior {n!r} is not an RGB parameter")
@@ -176,6 +188,11 @@ class ModelSpec(_Strict):
                 if n not in names or n == p.name:
                     raise ValueError(f"model {self.name!r}: {p.name}.inert_when refers to {n!r}, not another parameter")
         return self
+
+    def transmissive(self, params: dict[str, Value]) -> bool:
+        """Whether light passes through a sphere of this material with these parameters."""
+        return self.transmits or (self.transmits_with is not None
+                                  and float(params.get(self.transmits_with, 0.0)) > 0.0)  # type: ignore[arg-type]
 
     def param(self, name: str) -> ParamSpec:
         for p in self.parameters:

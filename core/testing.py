@@ -122,6 +122,63 @@ def analytic_lambert(scene: ProbeScene, albedo: float | tuple[float, float, floa
     return (e * rho / math.pi).astype(np.float32)
 
 
+def _fresnel(cos_i: np.ndarray, eta: float) -> np.ndarray:
+    """Unpolarised Fresnel reflectance of a smooth dielectric boundary (relative IOR ``eta``, light
+    arriving from the side of index 1 at cosine ``cos_i``)."""
+    sin_t2 = (1.0 - cos_i ** 2) / eta ** 2
+    cos_t = np.sqrt(np.clip(1.0 - sin_t2, 0.0, None))
+    rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
+    rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
+    return 0.5 * (rs ** 2 + rp ** 2)
+
+
+def _refract(d: np.ndarray, n: np.ndarray, eta: float) -> np.ndarray:
+    """Direction ``d`` refracted through a boundary of normal ``n`` (facing ``d``'s origin) into
+    relative index ``eta``; no total internal reflection (none happens inside a sphere)."""
+    cos_i = -(d * n).sum(-1, keepdims=True)
+    k = 1.0 - (1.0 - cos_i ** 2) / eta ** 2
+    return d / eta + (cos_i / eta - np.sqrt(np.clip(k, 0.0, None))) * n
+
+
+def analytic_glass(scene: ProbeScene, ior: float = 1.5, supersample: int = 3, bounces: int = 8) -> np.ndarray:
+    """Radiance image of a perfectly smooth, clear glass sphere (relative IOR ``ior``) under the
+    scene's environment: its Fresnel reflection, and the light through it after 0 to ``bounces``
+    internal reflections (in a sphere every one meets the boundary at the entry angle: the same
+    Fresnel, no total internal reflection). Point lights show in it as points: they add nothing.
+    Pixels are averaged over ``supersample``² rays (a renderer's box filter)."""
+    from .environment import lookup, radiance
+
+    env = scene.environment
+    out = np.zeros((scene.resolution, scene.resolution, 3))
+    if env is None:
+        return out.astype(np.float32)
+    px = radiance(env.map, env.scale, env.rotation)
+    c = np.array(scene.sphere.center, dtype=np.float64)
+    offsets = [(i + 0.5) / supersample for i in range(supersample)]
+    for ox in offsets:
+        for oy in offsets:
+            eye, d = _rays(scene, (ox, oy))
+            mask, t = _hit(scene, eye, d)
+            # Rays that miss follow one that hits the sphere's front head-on (then masked out).
+            d = np.where(mask[..., None], d, np.array([0.0, 0.0, -1.0]))
+            p = np.where(mask[..., None], eye + t[..., None] * d, c + [0.0, 0.0, scene.sphere.radius])
+            n = (p - c) / scene.sphere.radius
+            cos_i = np.clip(-(d * n).sum(-1), 0.0, 1.0)
+            f = _fresnel(cos_i, ior)[..., None]
+            colour = f * lookup(px, d + 2.0 * cos_i[..., None] * n)
+            inside, weight = _refract(d, n, ior), 1.0 - f
+            for _ in range(bounces + 1):
+                # The chord to the far side: from p along the inside direction, length -2 (inside . n_p).
+                p = p - 2.0 * ((inside * (p - c)).sum(-1, keepdims=True) / scene.sphere.radius) * \
+                    scene.sphere.radius * inside
+                n_out = (p - c) / scene.sphere.radius
+                colour += weight * (1.0 - f) * lookup(px, _refract(inside, -n_out, 1.0 / ior))
+                inside = inside - 2.0 * (inside * n_out).sum(-1, keepdims=True) * n_out
+                weight = weight * f
+            out += np.where(mask[..., None], colour, 0.0)
+    return (out / supersample ** 2).astype(np.float32)
+
+
 # -- the adapter contract test kit ------------------------------------------------------
 
 class AdapterContract:

@@ -20,7 +20,7 @@ from brdfremap.core.atomic import temp_beside, write_text_atomic
 from brdfremap.core.errors import ConfigError, RenderError
 from brdfremap.core.protocol import Adapter, ModelChoice
 from brdfremap.core.scene import ProbeScene
-from brdfremap.core.schemas import Value
+from brdfremap.core.schemas import TRANSMISSION_DEPTH, Value
 from brdfremap.core.textures import Texture, TextureMap
 from brdfremap.core.scratch import scratch_dir
 from brdfremap.core.workerproc import JsonLinesWorker
@@ -95,6 +95,13 @@ def lobe_image(passes: dict[str, np.ndarray], lobe: str | None) -> np.ndarray:
     raise RenderError(f"cycles: unknown lobe {lobe!r}")
 
 
+def depth(transmissive: bool) -> int:
+    """Cycles' bounces for a material: none for an opaque sphere (direct light alone), as many as
+    Mitsuba's path depth for a transmissive one (its max_depth counts the camera's segment and
+    the light's: two more)."""
+    return TRANSMISSION_DEPTH - 2 if transmissive else 0
+
+
 def texture_request(folder: Path, textures: dict[str, Texture] | None) -> dict[str, dict[str, str]]:
     """Textures as the worker takes them: absolute files (of names relative to ``folder``)."""
     return {k: {"file": str((Path(folder) / t.file).resolve()), "colorspace": t.colorspace, "filter": t.filter}
@@ -108,6 +115,10 @@ class CyclesAdapter(Adapter):
     models = MODELS
     light_types = frozenset({"point", "environment"})
     calibration = ("diffuse", {"color": 0.8})
+    # Principled glass: Base Color tints the transmitted light (white: clear), GGX as Mitsuba's.
+    glasses = {kind: ("principled", {"transmission_weight": 1.0, "base_color": 1.0, "ior": 1.5, "distribution": "ggx",
+                                     "roughness": r})
+               for kind, r in (("smooth", 0.0), ("rough", 0.1 ** 0.5))}
     textures = True
     max_cached = 8
 
@@ -151,7 +162,7 @@ class CyclesAdapter(Adapter):
         import json
 
         req = {"model": model, "params": {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()},
-               "scene": scene.document()}
+               "scene": scene.document(), "depth": depth(MODELS[model].transmissive(params))}
         return json.dumps(req, sort_keys=True), req
 
     def _cached(self, key: str, lobe: str | None) -> dict[str, np.ndarray] | None:
@@ -294,14 +305,14 @@ class CyclesAdapter(Adapter):
                 except OSError:
                     pass
 
-    def render_saved(self, path: Path, name: str, scene: ProbeScene) -> np.ndarray:
+    def render_saved(self, path: Path, name: str, scene: ProbeScene, transmissive: bool = False) -> np.ndarray:
         """A material of a .blend file (a library or material.blend this tool wrote), rendered on the
         probe mesh as Blender opens it: its textures read from the files it references."""
         self.renders += 1
         out = os.path.join(self.scratch, f"r{self.renders}.exr")
         try:
             self.worker.request({"op": "render_saved", "path": str(Path(path).resolve()), "name": name,
-                                 "scene": scene.document(), "out": out, "passes": False})
+                                 "scene": scene.document(), "out": out, "passes": False, "depth": depth(transmissive)})
             return read_passes(out, PASSES[:1])["Combined"]
         finally:
             try:

@@ -35,6 +35,7 @@ NO_COAT, NO_SHEEN, NO_SSS, NO_FILM = ({"coat_weight": 0.0}, {"sheen_weight": 0.0
 
 PRINCIPLED = ModelSpec(
     name="principled",
+    transmits_with="transmission_weight",
     description="Principled BSDF (multiscatter GGX by default). Lobes by render passes.",
     parameters=(
         ParamSpec(name="distribution", kind="choice", default="multi_ggx", choices=("multi_ggx", "ggx"), explore=True,

@@ -106,6 +106,7 @@ class BlenderState:
         self.passes = None
         self.materials = {}
         self.probes = None
+        self.depth = None
 
     # -- scene -------------------------------------------------------------------------
     def setup_scene(self, sc_json: dict) -> None:
@@ -142,11 +143,13 @@ class BlenderState:
         cy.use_adaptive_sampling = False
         cy.pixel_filter_type = "BOX"
         cy.filter_width = 1.0
-        # Direct lighting only: no bounces after the camera ray's first hit.
-        for attr in ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces",
-                     "volume_bounces", "transparent_max_bounces"):
-            setattr(cy, attr, 0)
-        cy.caustics_reflective = cy.caustics_refractive = False
+        self.depth = None  # set per request (set_depth)
+        # Nothing that trades the expectation for less noise (they act on bounces only: an opaque
+        # sphere, lit directly, is unchanged): light through a glass is a refractive caustic,
+        # factory settings clamp indirect samples at 10 and blur glossy bounces.
+        cy.caustics_reflective = cy.caustics_refractive = True
+        cy.sample_clamp_direct = cy.sample_clamp_indirect = 0.0
+        cy.blur_glossy = 0.0
         scene.view_settings.view_transform = "Standard"
         scene.view_settings.look = "None"
         scene.view_settings.exposure = 0.0
@@ -300,15 +303,28 @@ class BlenderState:
             self.link_textures(mat, bsdf, req["model"], textured)
         else:
             mat = self.material(req["model"], req["params"])
-        self.probes.use(mat, bool(textured) or float(req["params"].get("anisotropic", 0.0)) > 0.0)
+        self.probes.use(mat, bool(textured) or float(req["params"].get("anisotropic", 0.0)) > 0.0
+                        or int(req.get("depth", 0)) > 0)
         try:
             return self._render(req, t0)
         finally:
             if textured:
                 self.drop(mat)
 
+    def set_depth(self, depth: int) -> None:
+        """Bounces after the camera ray's first hit: none for an opaque sphere (direct light alone),
+        ``depth`` of every kind for a transmissive one (into the sphere, through it and out)."""
+        if depth == self.depth:
+            return
+        cy = self.bpy.context.scene.cycles
+        for attr in ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces",
+                     "volume_bounces", "transparent_max_bounces"):
+            setattr(cy, attr, depth)
+        self.depth = depth
+
     def _render(self, req: dict, t0: float) -> dict:
         scene = self.bpy.context.scene
+        self.set_depth(int(req.get("depth", 0)))
         scene.render.filepath = req["out"]
         # The lobe passes only when a lobe is asked for: accumulating them costs about 13 % of a
         # render (measured at 128² and 32², 16 spp).

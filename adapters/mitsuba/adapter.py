@@ -22,12 +22,13 @@ from brdfremap.core.atomic import write_text_atomic
 from brdfremap.core.errors import ConfigError, RenderError
 from brdfremap.core.protocol import Adapter, ModelChoice
 from brdfremap.core.scene import PointLight, ProbeScene
-from brdfremap.core.schemas import Value
+from brdfremap.core.schemas import TRANSMISSION_DEPTH, Value
 from brdfremap.core.textures import Texture, TextureMap
 
 from . import appearance as _appearance
 from .appearance import EXT_IOR
 from .blend import SLOTS, blend_appearance, component
+from .envmap import mitsuba_rows
 from .bsdfs import conductor_preset, register_bsdfs, trim_scale
 from .models import MODELS
 from .variant import as_dict, choose_variant
@@ -37,9 +38,12 @@ def _rgb(v: Value) -> dict:
     return {"type": "rgb", "value": list(v)}  # type: ignore[arg-type]
 
 
-def emitters(scene: ProbeScene) -> dict[str, Any]:
+def emitters(scene: ProbeScene, mi) -> dict[str, Any]:
     """The scene's lights as Mitsuba emitters: a point light is `point` (intensity in W/sr), the
-    environment `envmap` with an identity transform (`core.environment`'s orientation is Mitsuba's)."""
+    environment `envmap` with an identity transform (`core.environment`'s orientation is Mitsuba's),
+    its map's rows resampled as Mitsuba reads them (`envmap.mitsuba_rows`)."""
+    from brdfremap.core.environment import radiance
+
     out: dict[str, Any] = {}
     for i, light in enumerate(scene.lights):
         if isinstance(light, PointLight):
@@ -47,7 +51,22 @@ def emitters(scene: ProbeScene) -> dict[str, Any]:
                 "type": "point", "position": list(light.position),
                 "intensity": {"type": "rgb", "value": [light.intensity] * 3}}
         else:
-            out["environment"] = {"type": "envmap", "filename": light.document()["file"]}
+            rows = mitsuba_rows(radiance(light.map, light.scale, light.rotation))
+            out["environment"] = {"type": "envmap", "bitmap": mi.Bitmap(rows)}
+    return out
+
+
+def integrator(scene: ProbeScene, transmissive: bool) -> dict[str, Any]:
+    """Direct light alone for an opaque sphere (a point light reached by emitter sampling, an
+    environment by BSDF sampling too: a sharp lobe sees it no other way); paths deep enough to pass
+    through a transmissive one, without Russian roulette (the same expectation as Cycles' bounces,
+    no extra noise). The emitters are never seen directly: the background stays black."""
+    if transmissive:
+        return {"type": "path", "max_depth": TRANSMISSION_DEPTH, "rr_depth": TRANSMISSION_DEPTH,
+                "hide_emitters": True}
+    out: dict[str, Any] = {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0}
+    if scene.environment is not None:
+        out.update(bsdf_samples=1, hide_emitters=True)
     return out
 
 
@@ -284,12 +303,14 @@ def probe_transform(mi, scene: ProbeScene):
 
 class MitsubaAdapter(Adapter):
     name = "mitsuba"
-    version = "2"  # 2: the probe sphere's pole along +y (its tangent frame)
+    version = "3"  # 2: the probe sphere's pole along +y (its tangent frame); 3: environment rows as Mitsuba reads them, paths through glass
     summary = "Mitsuba 3, in process (llvm_ad_rgb when a working libLLVM is found, else scalar_rgb)"
     install_hint = "pip install 'brdf-remap[mitsuba]'"
     models = MODELS
     light_types = frozenset({"point", "environment"})
     calibration = ("diffuse", {"reflectance": 0.8})
+    glasses = {"smooth": ("dielectric", {"int_ior": 1.5}),
+               "rough": ("roughdielectric", {"distribution": "ggx", "alpha": 0.1, "int_ior": 1.5})}
     textures = True
     max_scenes = 8
 
@@ -339,15 +360,9 @@ class MitsubaAdapter(Adapter):
     def scene_dict(self, model: str, params: dict[str, Value], scene: ProbeScene) -> dict[str, Any]:
         mi = self.mi
         cam = scene.camera
-        integrator: dict[str, Any] = {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0}
-        if scene.environment is not None:
-            # An environment is reached by BSDF sampling too (a sharp lobe sees it no other way),
-            # and is not seen behind the sphere: the background stays black.
-            integrator.update(bsdf_samples=1, hide_emitters=True)
         return {
             "type": "scene",
-            # Direct lighting only; a point light is reached by emitter sampling alone.
-            "integrator": integrator,
+            "integrator": integrator(scene, self.models[model].transmissive(params)),
             "sensor": {
                 "type": "perspective", "fov": cam.fov, "fov_axis": "x",
                 "to_world": mi.ScalarTransform4f().look_at(origin=list(cam.position), target=list(cam.target),
@@ -358,12 +373,13 @@ class MitsubaAdapter(Adapter):
             },
             "probe": {"type": "sphere", "to_world": probe_transform(mi, scene),
                       "bsdf": bsdf_dict(model, params)},
-            **emitters(scene),
+            **emitters(scene, mi),
         }
 
     def _scene(self, model: str, params: dict[str, Value], scene: ProbeScene):
         spec = self.models[model]
-        key = (model, tuple(params[p.name] for p in spec.parameters if p.kind == "choice"), scene.cache_key())
+        key = (model, tuple(params[p.name] for p in spec.parameters if p.kind == "choice"), spec.transmissive(params),
+               scene.cache_key())
         if key in self._scenes:
             self._scenes.move_to_end(key)
             return self._scenes[key]

@@ -132,6 +132,7 @@ GLASS_NOTE = ("Glass: the probe sees only the reflection (its Fresnel and roughn
               "meets the black background and the sphere's own shadow, so transmittance is not identified.")
 
 DIELECTRIC = ModelSpec(
+    transmits=True,
     name="dielectric",
     description="Smooth glass. " + GLASS_NOTE + " Under a point light a smooth reflection is a point: fit "
                 "under an environment.",
@@ -141,6 +142,7 @@ DIELECTRIC = ModelSpec(
 )
 
 ROUGHDIELECTRIC = ModelSpec(
+    transmits=True,
     name="roughdielectric",
     description="Rough glass. " + GLASS_NOTE,
     parameters=(DISTRIBUTION, ALPHA, GLASS_IOR, SPEC_REFL, SPEC_TRANS),
@@ -148,6 +150,7 @@ ROUGHDIELECTRIC = ModelSpec(
 )
 
 THINDIELECTRIC = ModelSpec(
+    transmits=True,
     name="thindielectric",
     description="A thin glass sheet (a window pane) on the probe sphere. " + GLASS_NOTE,
     smooth=True,
@@ -165,6 +168,7 @@ def _carried(name, default, desc):
 
 PRINCIPLED = ModelSpec(
     name="principled",
+    transmits_with="spec_trans",
     description="Disney principled BSDF (Mitsuba 3's `principled`); lobes are not separable by parameters.",
     parameters=(
         ParamSpec(name="base_color", kind="rgb", default=(0.5, 0.5, 0.5), held_when={"spec_trans": 1.0},
