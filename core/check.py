@@ -14,9 +14,9 @@ from typing import Callable
 
 import numpy as np
 
-from .metrics import eight_bit, relative_rmse
-from .scene import PointLight, ProbeScene
-from .testing import analytic_lambert, scene_for, sphere_hits
+from .metrics import beyond_noise, eight_bit, relative_rmse
+from .scene import EnvironmentLight, PointLight, ProbeScene
+from .testing import analytic_glass, analytic_lambert, scene_for, sphere_hits
 
 SCENE = ProbeScene(resolution=48, spp=16)
 CALIBRATION = ProbeScene(resolution=64, spp=64)
@@ -159,11 +159,42 @@ def precision(render: Callable, white: tuple[str, dict] | None) -> Row:
     return Row(name, True, f"brightest {top:.3g} (expected {float(want.max()):.3g})")
 
 
-def run(render: Callable, models: dict, white: tuple[str, dict] | None) -> list[Row]:
+GLASS = ProbeScene(lights=[EnvironmentLight(type="environment", map="studio")], resolution=48, spp=256)
+GLASS_TOLERANCE = 0.03
+
+
+def transmission(render: Callable, models: dict, glass: tuple[str, dict] | None, environment: bool) -> Row:
+    """Light through a sphere: a clear smooth glass of IOR 1.5 against its analytic image under the studio
+    environment (paths deep enough to enter and leave it; what is seen through it, the same)."""
+    name = "transmission: a smooth glass against its analytic image"
+    through = sorted(m for m, spec in models.items() if spec.transmits or spec.transmits_with)
+    if not through:
+        return Row(name, True, "no model lets light through")
+    if glass is None:
+        return Row(name, False, f"{', '.join(through)} let light through, and no clear glass is declared",
+                   "declare a smooth clear glass of IOR 1.5 (an adapter's `glasses['smooth']`)")
+    if not environment:
+        return Row(name, None, "needs an environment light, which this adapter does not render")
+    inner = sphere_hits(GLASS).interior
+    first, second = (np.asarray(render(glass[0], glass[1], GLASS.with_(seed=s)), np.float64)[inner] for s in (0, 1))
+    exact = analytic_glass(GLASS, 1.5, supersample=6)[inner]
+    err, floor = relative_rmse(exact, (first + second) / 2), relative_rmse(first, second) / 2
+    far = beyond_noise(err, floor)
+    ratio = float((first + second).sum() / 2 / max(float(exact.sum()), 1e-30))
+    if far < GLASS_TOLERANCE:
+        return Row(name, True, f"{far:.2%} beyond the noise ({err:.2%}, noise {floor:.2%})")
+    return Row(name, False, f"{far:.2%} beyond the noise; {ratio:.3g}x the analytic image's light",
+               "trace paths deep enough to enter the sphere and leave it (at least 3 segments, a few more for "
+               "internal reflections), show the environment through it, and hit the sphere from inside")
+
+
+def run(render: Callable, models: dict, white: tuple[str, dict] | None, glass: tuple[str, dict] | None = None,
+        environment: bool = False) -> list[Row]:
     """Every check; ``render(model, params, scene, lobe=None) -> image``."""
     first = images(render, models)
     if not first.passed:  # the others index the image: say they did not run rather than fail on its shape
         return [first] + [Row(name, None, "not run: the images are not right (see images)") for name in (
-            "units", "orientation", "determinism", "lobes", "precision")]
+            "units", "orientation", "determinism", "lobes", "precision", "transmission")]
     return [first, calibration(render, white), orientation(render, white),
-            determinism(render, models), lobes(render, models), precision(render, white)]
+            determinism(render, models), lobes(render, models), precision(render, white),
+            transmission(render, models, glass, environment)]

@@ -115,7 +115,7 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
     env_ok = all("environment" in adapters[n].light_types for n in (src.adapter, tgt.adapter))
     fit = choose_scene(lambda sc: source(resolved.source_params, scene=sc), job.scene, env_ok,
                        job.settings.resolve_limit, job.settings.fit_scene,
-                       smooth=resolved.source_spec.smooth or resolved.target_spec.smooth)
+                       smooth=resolved.source_spec.is_smooth(resolved.source_params) or resolved.target_spec.smooth)
     renders = ProbeRenders(source, resolved.source_params, resolved.source_spec, target, fit.scene, given=job.scene,
                            given_noise=fit.scene_noise)
     informed = job.settings.start == "informed" and job.lookup is None and job.start is None

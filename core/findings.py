@@ -77,6 +77,43 @@ class HeldOutAbove(_Finding):
                 f"over the {self.threshold:.0%} threshold")
 
 
+class RenderersDisagree(_Finding):
+    """The two renderers draw this kind of material otherwise under one condition: its error there is
+    theirs, not the model's (`core.agreement`)."""
+
+    kind: Literal["renderers_disagree"] = "renderers_disagree"
+    condition: str
+    label: str
+    reference: str = Field(description="What was compared: each adapter's clear glass of IOR 1.5, smooth or rough.")
+    error: float = Field(description="The two references' relative RMSE (8 x 8 pixel blocks).")
+    beyond_noise: float
+    result_error: float | None = Field(None, description="The result's own error there, when over the threshold; "
+                                                         "None: the result matched there all the same (a note).")
+
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def severity(self) -> Severity:
+        return "note" if self.result_error is None else "unreliable"
+
+    def sentence(self) -> str:
+        what = f"the renderers disagree on light through a sphere under the {self.label}: their {self.reference}es " \
+               f"differ by {self.error:.1%} ({self.beyond_noise:.1%} beyond the noise)"
+        if self.result_error is None:
+            return what + "; the result matches there all the same"
+        return what + f", so the result's {self.result_error:.1%} there is the renderers' difference, not the model's"
+
+
+class TransportUnchecked(_Note):
+    """Light through the sphere could not be compared between the two renderers: no error of this
+    material is called the model's."""
+
+    kind: Literal["transport_unchecked"] = "transport_unchecked"
+    why: str
+
+    def sentence(self) -> str:
+        return f"{self.why}: an error here is not called a model mismatch"
+
+
 class CannotResolve(_Finding):
     """The renders are too noisy to tell a match from a mismatch: no error here means anything."""
 
@@ -350,7 +387,8 @@ class NoisePolished(_Note):
 
 
 Finding = Annotated[
-    Union[ErrorAboveThreshold, ModelMismatch, TableMismatch, HeldOutAbove, CannotResolve, ImagePrecision, NoEffect, IllConditioned,
+    Union[ErrorAboveThreshold, ModelMismatch, TableMismatch, HeldOutAbove, RenderersDisagree, TransportUnchecked,
+          CannotResolve, ImagePrecision, NoEffect, IllConditioned,
           NotAtMinimum,
           PinnedOnBound, RendererAlters, ValidationSkipped, NothingFitted, TableLookup, TexturedAbove, TexturedNotes,
           StartKept, ChoiceTried, SchemeChosen, DeadParameters,

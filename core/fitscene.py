@@ -41,7 +41,11 @@ class FitScene:
 
 
 def source_noise(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene) -> float:
-    return relative_rmse(render(scene), render(scene.with_(seed=scene.seed + 1)))
+    """Two renders' difference (relative RMSE); infinite when both are black (nothing resolved)."""
+    first, second = render(scene), render(scene.with_(seed=scene.seed + 1))
+    if not (np.any(first > 0) or np.any(second > 0)):
+        return math.inf
+    return relative_rmse(first, second)
 
 
 def _samples_for(noise: float, spp: int) -> int:
@@ -59,10 +63,16 @@ def choose(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, enviro
     if policy == "as-given":
         return FitScene(scene)
     noise = source_noise(render, scene)
-    if smooth and policy == "auto" and environment_ok and scene.environment is None and not scene.views:
+    if (smooth or noise == math.inf) and policy == "auto" and environment_ok and scene.environment is None \
+            and not scene.views:
         # Taken however noisy: under the point lights there is nothing to fit (the verdict says how noisy).
-        return _environment(render, scene, noise, math.inf, "a perfectly smooth material (it shows a point light "
-                                                            "as a point at most)")
+        why = "a perfectly smooth material (it shows a point light as a point at most)" if smooth else \
+            "the source renders black under the scene's lights"
+        found = _environment(render, scene, noise, math.inf, why)
+        if found is not None:
+            return found
+    if math.isinf(noise):  # black, and nowhere else to look: the engine says so
+        return FitScene(scene)
     if noise <= GOAL or scene.views:
         return FitScene(scene, noise=noise, scene_noise=noise)
     spp = _samples_for(noise, scene.spp)
@@ -86,6 +96,8 @@ def _environment(render, scene: ProbeScene, noise: float, limit: float, why: str
     env = scene.model_copy(update={"lights": [EnvironmentLight(type="environment", map="studio")],
                                    "name": f"{scene.name} under the studio environment"})
     n = source_noise(render, env)
+    if math.isinf(n):  # black there too: nothing to fit anywhere
+        return None
     if n > GOAL:
         spp = min(_samples_for(n, env.spp), env.spp * MAX_SPP_FACTOR)
         env = env.with_(spp=spp)
@@ -93,4 +105,4 @@ def _environment(render, scene: ProbeScene, noise: float, limit: float, why: str
     if n > limit:
         return None
     return FitScene(env, f"{why}: fitted under the studio environment at {env.spp} spp ({n:.1%}), which a "
-                         "near-mirror reflects whole", n, noise)
+                         "near-mirror reflects whole", n, noise if math.isfinite(noise) else 0.0)

@@ -138,11 +138,13 @@ def resolve(job: Job, registry: AdapterRegistry, where: Where = Where()) -> Reso
         raise ConfigError(f"drives {', '.join(sorted(src.textures))} by images: a fit remaps one uniform material; "
                           "remap a textured one texel by texel through a table (--table TABLE, built with `remap "
                           "table build`)", file=where.source_file, field="textures")
-    src_params = src_spec.complete(src.params, file=where.source_file, prefix=where.params_prefix)
+    settled = src_spec.settle(src.params, file=where.source_file, prefix=where.params_prefix)
+    src_params = src_spec.complete(settled, file=where.source_file, prefix=where.params_prefix)
     tgt = job.target
     tgt_spec = model_of(registry, tgt.adapter, tgt.model, where.target_file, where.target_prefix)
-    given = tgt_spec.complete(tgt.fix, file=where.target_file, prefix=where.fix_prefix)
-    fixed = {k: given[k] for k in tgt.fix}
+    fix = tgt_spec.settle(tgt.fix, file=where.target_file, prefix=where.fix_prefix)
+    given = tgt_spec.complete(fix, file=where.target_file, prefix=where.fix_prefix)
+    fixed = {k: given[k] for k in fix}
     base = tgt_spec.complete({})
     if (src.adapter, src.model) == (tgt.adapter, tgt.model):
         # Same model: discrete choices (distribution, material preset) carry over unless fixed.

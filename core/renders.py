@@ -13,12 +13,13 @@ import numpy as np
 
 from .cache import RenderCache, render_key
 from .engine.levels import Level
-from .engine.results import Validation
+from .agreement import agreement
+from .engine.results import Agreement, Validation
 from .metrics import relative_rmse
 from .protocol import Adapter, check_image
 from .scene import ProbeScene
 from .schemas import ModelSpec, Value
-from .validation import validate
+from .validation import held_out_scenes, validate
 
 
 def _round(v: Value) -> Value:
@@ -164,6 +165,16 @@ class ProbeRenders:
         return validate(lambda sc: self.source(self.source_params, scene=sc), lambda sc: self.target(params, scene=sc),
                         self.job_scene, problems, given=self.other_lights,
                         given_noise=self.given_noise, fit_lights=self.scene.view_scenes()[0].lights)
+
+    def agreement(self, params: dict[str, Value], validation: Validation, threshold: float, judged) -> Agreement:
+        transmissive = self.source_spec.transmissive(self.source_params) or \
+            self.target.adapter.models[self.target.model].transmissive(params)
+        fit = (self.scene.with_(seed=self.scene.seed + 2), self.scene.with_(seed=self.scene.seed + 3))
+        conditions = [("scene", "fit scene", fit)] + [
+            (c.name, c.label, (a, b)) for c, a, b in held_out_scenes(self.job_scene, self.other_lights,
+                                                                       self.scene.view_scenes()[0].lights)
+            if c.name in {k.condition for k in validation.checks}]
+        return agreement(self.source.adapter, self.target.adapter, transmissive, conditions, threshold, judged)
 
     def notes(self, params: dict[str, Value]) -> list[str]:
         return list(self.target.adapter.notes(self.target.model, params))

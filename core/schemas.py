@@ -152,6 +152,9 @@ class ModelSpec(_Strict):
     smooth: bool = Field(False, description="Its reflection is perfectly smooth (a mirror, a smooth glass): a point "
                                             "light shows in it as a point at most, so it is seen, and fitted, "
                                             "under an environment.")
+    smooth_when: dict[str, float] = Field(default_factory=dict, description="Numeric parameters whose values make "
+                                                                          "it perfectly smooth, as `smooth` is (a "
+                                                                          "Principled BSDF of roughness 0).")
     transmits: bool = Field(False, description="Light passes through it (a glass): adapters render it with paths "
                                                "deep enough to enter the sphere and leave it (`TRANSMISSION_DEPTH`).")
     transmits_with: str | None = Field(None, description="The parameter whose positive value lets light through "
@@ -177,6 +180,9 @@ class ModelSpec(_Strict):
         for n in self.texturable:
             if n not in names or self.param(n).kind == "choice":
                 raise ValueError(f"model {self.name!r}: texturable {n!r} is not a numeric parameter")
+        for n in self.smooth_when:
+            if n not in names or self.param(n).kind != "scalar":
+                raise ValueError(f"model {self.name!r}: smooth_when {n!r} is not a scalar parameter")
         if self.transmits_with is not None and (self.transmits_with not in names
                                                 or self.param(self.transmits_with).kind != "scalar"):
             raise ValueError(f"model {self.name!r}: transmits_with {self.transmits_with!r} is not a scalar parameter")
@@ -188,6 +194,11 @@ class ModelSpec(_Strict):
                 if n not in names or n == p.name:
                     raise ValueError(f"model {self.name!r}: {p.name}.inert_when refers to {n!r}, not another parameter")
         return self
+
+    def is_smooth(self, params: dict[str, Value]) -> bool:
+        """Whether its reflection is perfectly smooth with these parameters (`smooth`, `smooth_when`)."""
+        return self.smooth or (bool(self.smooth_when) and all(
+            float(params.get(k, math.nan)) == v for k, v in self.smooth_when.items()))  # type: ignore[arg-type]
 
     def transmissive(self, params: dict[str, Value]) -> bool:
         """Whether light passes through a sphere of this material with these parameters."""
@@ -220,6 +231,35 @@ class ModelSpec(_Strict):
         out: dict[str, Value] = {}
         for p in self.parameters:
             out[p.name] = p.coerce(given[p.name], f"{prefix}.{p.name}", file) if p.name in given else p.default
+        return out
+
+    def settle(self, given: dict[str, Any], *, file: str | None = None, prefix: str = "params") -> dict[str, Any]:
+        """``given`` with the choices its values imply: a value away from its default that counts only
+        with one value of a choice the file leaves unsaid sets that choice (alpha_u and alpha_v mean
+        anisotropic, as in Mitsuba's own files); one whose choice the file sets otherwise, or two
+        that need different values of one choice, is a ConfigError naming both. Nothing given is
+        dropped without a word."""
+        out = dict(given)
+        needs: dict[str, tuple[tuple[str, ...], str]] = {}  # choice -> (values it may take, the value needing it)
+        for name, value in given.items():
+            if name not in self.names or _same(self.param(name).default, value):
+                continue
+            for choice, allowed in self.param(name).active_when.items():
+                where = f"{prefix}.{name}"
+                if choice in given and given[choice] not in allowed:
+                    raise ConfigError(f"{name} counts only with {choice}: {' or '.join(allowed)}, and {choice} is "
+                                      f"{given[choice]!r}: remove {name}, or set {choice}", file=file, field=where)
+                if choice in needs and not set(allowed) & set(needs[choice][0]):
+                    other = needs[choice][1]
+                    raise ConfigError(f"{name} and {other} need different {choice} ({' or '.join(allowed)}, "
+                                      f"{' or '.join(needs[choice][0])}): give one of them", file=file, field=where)
+                needs[choice] = (tuple(a for a in allowed if a in needs.get(choice, (allowed, ""))[0]), name)
+        for choice, (allowed, name) in needs.items():
+            if choice not in given and self.param(choice).default not in allowed:
+                if len(allowed) != 1:
+                    raise ConfigError(f"{name} counts only with {choice}: {' or '.join(allowed)}: set {choice}",
+                                      file=file, field=f"{prefix}.{name}")
+                out[choice] = allowed[0]
         return out
 
     def is_active(self, name: str, params: dict[str, Value]) -> bool:
@@ -261,6 +301,16 @@ class Material(_Strict):
     textures: dict[str, Texture] = Field(default_factory=dict, description="Parameters driven by an image, texel by "
                                                                             "texel (its `params` value is the one "
                                                                             "used without the texture).")
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Whether a given value is a parameter's default (numbers compared as numbers)."""
+    try:
+        x = [float(v) for v in (a if isinstance(a, (list, tuple)) else [a])]
+        y = [float(v) for v in (b if isinstance(b, (list, tuple)) else [b])]
+    except (TypeError, ValueError):
+        return a == b
+    return x == y or (len(x) == 3 and len(y) == 1 and x == y * 3)
 
 
 def load_material(path: str | Path) -> Material:

@@ -76,10 +76,11 @@ def point_light_irradiance(scene: ProbeScene, hits: SphereHits, light: PointLigh
     return np.where(hits.mask, light.intensity * cos / dist2, 0.0), l
 
 
-def scene_for(spec, scene: ProbeScene, environment_ok: bool = True) -> ProbeScene:
-    """The scene a model is seen in: under the studio environment for a smooth one (`ModelSpec.smooth`:
-    a point light shows in a mirror as a point at most), where the adapter renders one."""
-    if spec.smooth and environment_ok:
+def scene_for(spec, scene: ProbeScene, environment_ok: bool = True, params: dict | None = None) -> ProbeScene:
+    """The scene a model is seen in: under the studio environment for a smooth one (`ModelSpec.is_smooth`
+    with ``params``, else its defaults: a point light shows in a mirror as a point at most), where
+    the adapter renders one."""
+    if spec.is_smooth(params if params is not None else spec.complete({})) and environment_ok:
         return scene.model_copy(update={"lights": [EnvironmentLight(type="environment", map="studio")]})
     return scene
 

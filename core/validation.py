@@ -111,6 +111,12 @@ def scenes(scene: ProbeScene, conditions=CONDITIONS, fit_lights=()) -> list[tupl
     return out
 
 
+def held_out_scenes(scene: ProbeScene, given: bool = False, fit_lights=()) -> list:
+    """Every condition a result is validated under (the job's own lights first when the fit ran
+    under others), with its two half-sample scenes."""
+    return scenes(scene, ((given_condition(scene),) if given else ()) + CONDITIONS, fit_lights)
+
+
 def _problem(scene: ProbeScene) -> str | None:
     """Why a condition's scene cannot be rendered here (a light inside the sphere), checked as a
     scene file is."""
@@ -142,8 +148,7 @@ def validate(render_source, render_target, scene: ProbeScene, problems, given: b
     ``given_noise``: two source renders' difference there at ``scene.spp``, measured before the fit;
     ``fit_lights``: the lights the fit ran under (the studio among them is turned for its check)."""
     result = Validation()
-    conditions = ((given_condition(scene),) if given else ()) + CONDITIONS
-    for cond, a, b in scenes(scene, conditions, fit_lights):
+    for cond, a, b in held_out_scenes(scene, given, fit_lights):
         why = problems(a) or _problem(a)
         if why:
             result.skipped[cond.name] = why

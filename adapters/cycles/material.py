@@ -18,7 +18,7 @@ NODES: dict[str, tuple[str, dict[str, str], dict[str, str]]] = {
         "subsurface_ior": "Subsurface IOR", "subsurface_anisotropy": "Subsurface Anisotropy",
         "transmission_weight": "Transmission Weight", "thin_film_thickness": "Thin Film Thickness",
         "thin_film_ior": "Thin Film IOR", "alpha": "Alpha",
-    }, {"distribution": "distribution"}),
+    }, {"distribution": "distribution", "subsurface_method": "subsurface_method"}),
     "glossy": ("ShaderNodeBsdfGlossy", {"color": "Color", "roughness": "Roughness"}, {"distribution": "distribution"}),
     "diffuse": ("ShaderNodeBsdfDiffuse", {"color": "Color", "roughness": "Roughness"}, {}),
     "metallic": ("ShaderNodeBsdfMetallic", {"ior": "IOR", "extinction": "Extinction", "roughness": "Roughness"},

@@ -35,6 +35,7 @@ NO_COAT, NO_SHEEN, NO_SSS, NO_FILM = ({"coat_weight": 0.0}, {"sheen_weight": 0.0
 
 PRINCIPLED = ModelSpec(
     name="principled",
+    smooth_when={"roughness": 0.0},
     transmits_with="transmission_weight",
     description="Principled BSDF (multiscatter GGX by default). Lobes by render passes.",
     parameters=(
@@ -70,9 +71,15 @@ PRINCIPLED = ModelSpec(
                   inert_when=NO_SSS, description="Subsurface Radius per channel (times Subsurface Scale)."),
         ParamSpec(name="subsurface_scale", kind="scalar", lower=0.0, upper=100.0, default=0.05, fit=False,
                   inert_when=NO_SSS, description="Subsurface Scale (scene units)."),
+        ParamSpec(name="subsurface_method", kind="choice", default="random_walk", inert_when=NO_SSS,
+                  choices=("random_walk", "random_walk_skin", "burley"),
+                  description="Subsurface Method (Blender's default: Random Walk; its IOR only the skin variant "
+                              "reads)."),
         ParamSpec(name="subsurface_ior", kind="scalar", lower=1.01, upper=3.8, default=1.4, fit=False,
-                  inert_when=NO_SSS, description="Subsurface IOR."),
-        _unit("subsurface_anisotropy", 0.0, fit=False, desc="Subsurface Anisotropy.", inert_when=NO_SSS),
+                  inert_when=NO_SSS, active_when={"subsurface_method": ("random_walk_skin",)},
+                  description="Subsurface IOR (the Random Walk (Skin) method's)."),
+        _unit("subsurface_anisotropy", 0.0, fit=False, desc="Subsurface Anisotropy (the random walks').",
+              inert_when=NO_SSS, active_when={"subsurface_method": ("random_walk", "random_walk_skin")}),
         _unit("transmission_weight", 0.0, fit=False, desc="Transmission Weight (the probe sees the refracted "
               "black background: transmission shows as light missing from the reflection)."),
         ParamSpec(name="thin_film_thickness", kind="scalar", lower=0.0, upper=100000.0, default=0.0, fit=False,
@@ -95,6 +102,7 @@ weight and roughness are fitted when the source has that lobe (`fit_when_carried
 
 GLOSSY = ModelSpec(
     name="glossy",
+    smooth_when={"roughness": 0.0},
     description="Glossy BSDF: a microfacet lobe with a constant colour (no Fresnel).",
     parameters=(
         ParamSpec(name="distribution", kind="choice", default="ggx", explore=True,
@@ -119,6 +127,7 @@ DIFFUSE = ModelSpec(
 
 METALLIC = ModelSpec(
     name="metallic",
+    smooth_when={"roughness": 0.0},
     description="Metallic BSDF with the physical conductor Fresnel (complex IOR per channel).",
     parameters=(
         ParamSpec(name="distribution", kind="choice", default="multi_ggx", choices=("beckmann", "ggx", "multi_ggx"), explore=True,

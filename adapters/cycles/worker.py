@@ -256,6 +256,8 @@ class BlenderState:
 
         _, inputs, props = NODES[model]
         for pname, prop in props.items():
+            if pname not in params:  # a caller naming fewer (cycles-subprocess.yaml) leaves Blender's default
+                continue
             value = enum_value(params[pname])
             if getattr(bsdf, prop) != value:
                 setattr(bsdf, prop, value)

@@ -139,6 +139,11 @@ def _principled(p: dict[str, Value]) -> dict[str, Any]:
     return d
 
 
+def _same_slots(p: dict[str, Value]) -> bool:
+    """Whether a blend's two BSDFs are the same model with the same values (Mitsuba loads them as one)."""
+    return bsdf_dict(*component(SLOTS[0], p)) == bsdf_dict(*component(SLOTS[1], p))
+
+
 def _blend(p: dict[str, Value]) -> dict[str, Any]:
     d: dict[str, Any] = {"type": "blendbsdf", "weight": p["weight"]}
     for slot in SLOTS:
@@ -378,8 +383,9 @@ class MitsubaAdapter(Adapter):
 
     def _scene(self, model: str, params: dict[str, Value], scene: ProbeScene):
         spec = self.models[model]
+        shared = model == "blendbsdf" and _same_slots(params)
         key = (model, tuple(params[p.name] for p in spec.parameters if p.kind == "choice"), spec.transmissive(params),
-               scene.cache_key())
+               shared, scene.cache_key())
         if key in self._scenes:
             self._scenes.move_to_end(key)
             return self._scenes[key]
@@ -391,7 +397,10 @@ class MitsubaAdapter(Adapter):
         handle = self.mi.traverse(sc)
         keys = {}
         for tname in traverse_values(model, spec, params):
-            for cand in (f"probe.bsdf.{tname}.value", f"probe.bsdf.{tname}"):
+            # Mitsuba makes a blend's two identical BSDFs one object, under bsdf_0's name.
+            same = tname.replace(f"{SLOTS[1]}.", f"{SLOTS[0]}.", 1) if shared else tname
+            for cand in (f"probe.bsdf.{tname}.value", f"probe.bsdf.{tname}", f"probe.bsdf.{same}.value",
+                         f"probe.bsdf.{same}"):
                 if cand in handle:
                     keys[tname] = cand
                     break

@@ -162,12 +162,14 @@ def _unit(name, default, fit=True, desc="", **kw):
     return ParamSpec(name=name, kind="scalar", default=default, fit=fit, description=desc, **kw)
 
 
-def _carried(name, default, desc):
-    return ParamSpec(name=name, kind="scalar", default=default, fit=False, fit_when_carried=True, description=desc)
+def _carried(name, default, desc, **kw):
+    return ParamSpec(name=name, kind="scalar", default=default, fit=False, fit_when_carried=True, description=desc,
+                     **kw)
 
 
 PRINCIPLED = ModelSpec(
     name="principled",
+    smooth_when={"roughness": 0.0},
     transmits_with="spec_trans",
     description="Disney principled BSDF (Mitsuba 3's `principled`); lobes are not separable by parameters.",
     parameters=(
@@ -181,9 +183,10 @@ PRINCIPLED = ModelSpec(
         _carried("anisotropic", 0.0, "Anisotropy: α along the tangent r²/√(1 − 0.9 a), across r²·√(1 − 0.9 a) (the "
                  "probe's tangent runs along the sphere's latitudes; Mitsuba has no rotation)."),
         _carried("sheen", 0.0, "Sheen amount."),
-        _unit("sheen_tint", 0.0, fit=False, desc="Sheen tint towards the base colour."),
+        _unit("sheen_tint", 0.0, fit=False, desc="Sheen tint towards the base colour.", inert_when={"sheen": 0.0}),
         _carried("clearcoat", 0.0, "Clear-coat amount (a GTR1 lobe at a fixed IOR 1.5, scaled by 1/4)."),
-        _carried("clearcoat_gloss", 0.0, "Clear-coat glossiness (α from 0.1 at 0 to 0.001 at 1)."),
+        _carried("clearcoat_gloss", 0.0, "Clear-coat glossiness (α from 0.1 at 0 to 0.001 at 1).",
+                 inert_when={"clearcoat": 0.0}),
         _unit("spec_trans", 0.0, fit=False, desc="Specular transmission: the probe sees it as reflection lost "
               "to the black background."),
         _unit("flatness", 0.0, fit=False, desc="Flatness: the diffuse lobe blended towards Hanrahan-Krueger's "

@@ -10,8 +10,8 @@ from . import options
 
 def parser() -> argparse.ArgumentParser:
     p = options.Parser(prog="remap check", description="Check that an adapter keeps the conventions every "
-                       "renderer must share (units, orientation, determinism, lobes, precision); exit 0 only "
-                       "when every check passes.")
+                       "renderer must share (units, orientation, determinism, lobes, precision, light through a "
+                       "glass); exit 0 only when every check passes.")
     p.add_argument("adapter", metavar="ADAPTER", help="an installed adapter's name, or a renderer definition file")
     p.add_argument("--model", action="append", help="check only this model (repeatable; default: every model)")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
@@ -36,10 +36,13 @@ def run(args: argparse.Namespace) -> int:
     white = getattr(entry.factory, "calibration", None)
     if white is not None:
         white = (white[0], entry.models[white[0]].complete(white[1], file=f"adapter {name!r}", prefix="calibration.params"))
+    glass = getattr(entry.factory, "glasses", {}).get("smooth")
+    if glass is not None:
+        glass = (glass[0], entry.models[glass[0]].complete(glass[1], file=f"adapter {name!r}", prefix="glasses.smooth"))
     adapter = registry.create(name)
     try:
         rows = run_checks(lambda model, params, scene, lobe=None: adapter.render(model, params, scene, lobe), models,
-                          white)
+                          white, glass, "environment" in entry.light_types)
     finally:
         adapter.close()
     width = max(len(r.name) for r in rows)

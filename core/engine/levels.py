@@ -14,7 +14,7 @@ import numpy as np
 
 from ..scene import ProbeScene
 from ..schemas import Value
-from .results import Validation
+from .results import Agreement, Validation
 
 RenderFn = Callable[[dict[str, Value], "str | None"], np.ndarray]
 ProgressFn = Callable[[str, int, float], None]
@@ -69,6 +69,11 @@ class Renders(Protocol):
 
     def validation(self, params: dict[str, Value]) -> Validation:
         """Source and target with ``params`` under held-out lights the fit never saw."""
+
+    def agreement(self, params: dict[str, Value], validation: Validation, threshold: float, judged) -> Agreement:
+        """Whether the two renderers agree on this kind of material (the source's, and the target's with
+        ``params``) under the fit scene and the
+        held-out conditions ``judged(condition)`` says the verdict judges (`core.agreement`)."""
 
     def notes(self, params: dict[str, Value]) -> list[str]:
         """What the target renderer does to these values that the image cannot show (a trim)."""

@@ -60,6 +60,29 @@ class Check(Strict):
                                            "a held-out light.")
 
 
+class Disagreement(Strict):
+    """Two renderers drawing one kind of material otherwise under one condition: their reference
+    materials (clear glasses) differ there beyond the noise, by more than the threshold."""
+
+    condition: str = Field(description="'scene' (the fit's) or a held-out condition.")
+    label: str
+    kind: str = Field(description="The reference compared (smooth glass, rough glass).")
+    error: float
+    noise_floor: float
+    beyond_noise: float
+
+
+@dataclass
+class Agreement:
+    """Whether the job's two renderers agree on its kind of material (`core.agreement`)."""
+
+    checked: bool = False
+    """Their references were compared (a transmissive material between two adapters)."""
+    disagree: list[Disagreement] = field(default_factory=list)
+    unchecked: str = ""
+    """Why they could not be compared, where they should have been."""
+
+
 @dataclass
 class Validation:
     """What the held-out conditions showed, and those that could not be rendered (condition: why)."""

@@ -331,10 +331,13 @@ def _conclude(run: _Run, plan: Plan, state: _State, assessment: Assessment, join
     target_noise = run.renders.target_noise(state.params)
     validation = run.renders.validation(state.params) if run.settings.validation == "held-out" else Validation()
     floor = float(np.hypot(run.source_noise, target_noise) / np.sqrt(2))
+    limit = run.settings.resolve_limit
+    judged = {"scene": floor <= limit, **{c.condition: c.noise_floor <= limit for c in validation.checks}}
+    agreement = run.renders.agreement(state.params, validation, run.threshold, lambda c: judged.get(c, False))
     evidence = Evidence(error=state.err, noise_floor=floor, threshold=run.threshold,
                         resolve_limit=run.settings.resolve_limit, assessment=assessment, stages=run.stages,
                         cond_limit=run.tuning.cond_limit, renderer_notes=run.renders.notes(state.params),
-                        fitted=bool(run.free), trust_prediction=trust, validation=validation,
+                        fitted=bool(run.free), trust_prediction=trust, validation=validation, agreement=agreement,
                         images=(run.scene.source, state.image))
     return EngineResult(
         params=state.params, fitted=list(run.free), scheme=run.settings.scheme, scheme_used=plan.scheme,

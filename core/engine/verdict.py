@@ -22,12 +22,14 @@ from ..findings import (
     PinnedOnBound,
     TableLookup,
     RendererAlters,
+    RenderersDisagree,
+    TransportUnchecked,
     ValidationSkipped,
     Verdict,
 )
 from ..metrics import beyond_noise, clipped_at, eight_bit
 from .assess import Assessment
-from .results import StageResult, Validation
+from .results import Agreement, StageResult, Validation
 
 LOOKUP_SLACK = 1.2
 """A table's lookup within this factor of what the table's direct fits reach there is the model's mismatch."""
@@ -53,6 +55,8 @@ class Evidence:
     trust_prediction: bool = True
     """False when joint rounds already failed to realise what a joint step predicts."""
     validation: Validation = field(default_factory=Validation)
+    agreement: Agreement = field(default_factory=Agreement)
+    """Whether the two renderers agree on this kind of material, condition by condition."""
     images: tuple = ()
     """(source, target) at the final parameters: checked for clipping and 8-bit levels."""
 
@@ -64,26 +68,37 @@ class Evidence:
 def _errors(ev: Evidence) -> list:
     """The fit scene's error and each held-out condition's, judged beyond the noise. Where the noise
     floor is over the limit nothing is judged: a finding that says so, a note while another
-    condition resolves the material (the verdict rests on those), else unreliable."""
+    condition resolves the material (the verdict rests on those), else unreliable. Where the
+    renderers draw this kind of material otherwise, a condition's error is theirs: said so instead."""
     resolved = (ev.noise_floor <= ev.resolve_limit) + sum(c.noise_floor <= ev.resolve_limit
                                                           for c in ev.validation.checks)
+    theirs = {d.condition: d for d in ev.agreement.disagree}
     out: list = []
     if ev.noise_floor > ev.resolve_limit:
         out.append(CannotResolve(condition="scene", label="the scene", noise_floor=ev.noise_floor,
                                  limit=ev.resolve_limit, advice=SCENE_ADVICE, elsewhere=resolved > 0))
-    elif ev.beyond_noise > ev.threshold:
+    elif ev.beyond_noise > ev.threshold and "scene" not in theirs:
         out.append(ErrorAboveThreshold(error=ev.error, threshold=ev.threshold, beyond_noise=ev.beyond_noise))
+    if "scene" in theirs:
+        out.append(_disagree(theirs["scene"], ev.error if ev.beyond_noise > ev.threshold else None))
     above = []
     for c in ev.validation.checks:
         if c.noise_floor > ev.resolve_limit:
             out.append(CannotResolve(condition=c.condition, label=f"the {c.label}", noise_floor=c.noise_floor,
                                      limit=ev.resolve_limit, advice=HELD_OUT_ADVICE, elsewhere=resolved > 0))
+        elif c.condition in theirs:
+            out.append(_disagree(theirs[c.condition], c.error if c.beyond_noise > ev.threshold else None))
         elif c.beyond_noise > ev.threshold:
             above.append(HeldOutError(condition=c.condition, label=c.label, error=c.error,
                                       beyond_noise=c.beyond_noise))
     if above:
         out.append(HeldOutAbove(conditions=above, threshold=ev.threshold))
     return out
+
+
+def _disagree(d, result_error: float | None) -> RenderersDisagree:
+    return RenderersDisagree(condition=d.condition, label=d.label, reference=d.kind, error=d.error,
+                             beyond_noise=d.beyond_noise, result_error=result_error)
 
 
 def _fit_problems(ev: Evidence) -> list:
@@ -118,7 +133,7 @@ def judge(ev: Evidence, notes: list) -> Verdict:
     errors = _errors(ev)
     fit = (_fit_problems(ev) if ev.fitted else []) + _image_problems(ev)
     scene = [p for p in errors if isinstance(p, ErrorAboveThreshold)]
-    if ev.fitted and scene and not fit and all(s.converged for s in ev.stages):
+    if ev.fitted and scene and not fit and all(s.converged for s in ev.stages) and not ev.agreement.unchecked:
         errors = [ModelMismatch(error=ev.error, threshold=ev.threshold, beyond_noise=ev.beyond_noise)
                   if p is scene[0] else p for p in errors]
     lookup = next((n for n in notes if isinstance(n, TableLookup)), None)
@@ -128,6 +143,8 @@ def judge(ev: Evidence, notes: list) -> Verdict:
                   if p is scene[0] else p for p in errors]
     problems = errors + fit + [RendererAlters(detail=n) for n in ev.renderer_notes]
     extra: list = [ValidationSkipped(condition=k, why=v) for k, v in ev.validation.skipped.items()]
+    if ev.agreement.unchecked:
+        extra.append(TransportUnchecked(why=ev.agreement.unchecked))
     if not ev.fitted and not any(isinstance(n, TableLookup) for n in notes):
         extra.append(NothingFitted())
     elif ev.assessment.dead and not ev.assessment.no_effect:

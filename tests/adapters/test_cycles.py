@@ -64,7 +64,7 @@ def test_what_principled_declares_inert_leaves_the_image_unchanged(cycles_adapte
     away = {"ior": 2.4, "specular_ior_level": 0.1, "coat_roughness": 0.6, "coat_ior": 2.2, "coat_tint": (0.9, 0.5, 0.3),
             "sheen_roughness": 0.1, "sheen_tint": (1.0, 0.2, 0.2), "subsurface_radius": (0.1, 1.0, 1.0),
             "subsurface_scale": 1.0, "subsurface_ior": 2.0, "subsurface_anisotropy": 0.5, "thin_film_ior": 2.0,
-            "anisotropic_rotation": 0.3}
+            "anisotropic_rotation": 0.3, "subsurface_method": "burley"}
     inert = {q.name for q in spec.parameters if q.inert_when}
     assert inert == set(away)  # every declaration is checked here: coat, sheen, subsurface weights, film, anisotropy 0
     for name, value in away.items():

@@ -58,7 +58,8 @@ def test_in_place_update_equals_a_fresh_scene(mitsuba_adapter, model, a, b):
         rebuilt = fresh.render(model, pb, SCENE)
     finally:
         fresh.close()
-    assert relative_rmse(rebuilt, updated) < 1e-6
+    # Rounding alone (a glass's deeper paths: 2.6e-6): a stale or missed update is percents off.
+    assert relative_rmse(rebuilt, updated) < 1e-5
 
 
 def test_material_preset_sets_conductor_colour(mitsuba_adapter):

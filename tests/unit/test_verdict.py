@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from brdfremap.core.engine.assess import Assessment
 from brdfremap.core.engine.levels import Level
-from brdfremap.core.engine.results import Check, StageResult, Validation
+from brdfremap.core.engine.results import Agreement, Check, Disagreement, StageResult, Validation
 from brdfremap.core.engine.schedule import _never_worse, _State, coarse_size, highlight_pixels
 from brdfremap.core.engine.verdict import Evidence, judge
 
@@ -22,11 +22,35 @@ def _check(name, error, floor):
                  perceptual=1.0, noise_floor=floor, beyond_noise=max(0.0, error**2 - floor**2) ** 0.5)
 
 
-def _judge(error, floor, checks=(), fitted=True):
+def _judge(error, floor, checks=(), fitted=True, agreement=None):
     ev = Evidence(error=error, noise_floor=floor, threshold=0.05, resolve_limit=0.10,
                   assessment=Assessment(condition=10.0, no_effect=False), stages=[CONVERGED], cond_limit=1e4,
-                  renderer_notes=[], fitted=fitted, validation=Validation(checks=list(checks)))
+                  renderer_notes=[], fitted=fitted, validation=Validation(checks=list(checks)),
+                  agreement=agreement or Agreement())
     return judge(ev, [])
+
+
+def _disagree(condition, label):
+    return Disagreement(condition=condition, label=label, kind="smooth glass", error=0.3, noise_floor=0.02,
+                        beyond_noise=0.29)
+
+
+def test_where_the_renderers_draw_the_kind_otherwise_the_model_is_not_blamed():
+    """A glass whose renderers do not carry light through it alike: its error is theirs."""
+    studio = [_check("environment", 0.40, 0.02)]
+    blamed = _judge(0.35, 0.02, studio)
+    assert blamed.status == "mismatch"  # the renderers agreeing, this is the model's
+    v = _judge(0.35, 0.02, studio, agreement=Agreement(checked=True, disagree=[
+        _disagree("scene", "fit scene"), _disagree("environment", "studio environment")]))
+    assert v.status == "unreliable" and not any(f.kind in ("model_mismatch", "held_out_above") for f in v.findings)
+    assert [f.kind for f in v.problems] == ["renderers_disagree"] * 2
+    assert "the renderers disagree on light through a sphere under the studio environment" in v.reason
+    assert "is the renderers' difference, not the model's" in v.reason
+    v = _judge(0.35, 0.02, studio, agreement=Agreement(unchecked="adapter 'x' declares no clear glasses"))
+    assert v.status == "unreliable" and not any(f.kind == "model_mismatch" for f in v.findings)
+    assert any("not called a model mismatch" in n for n in v.notes)
+    matched = _judge(0.01, 0.01, agreement=Agreement(checked=True, disagree=[_disagree("scene", "fit scene")]))
+    assert matched.status == "ok" and any("matches there all the same" in n for n in matched.notes)
 
 
 def test_the_threshold_is_fixed_and_judges_the_error_beyond_the_noise():

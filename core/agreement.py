@@ -1,0 +1,76 @@
+"""Whether a job's two renderers agree on its kind of material, under the lights it is judged by.
+
+A remap's error is the model's only where both renderers draw the same thing alike. For opaque
+materials the lights' calibration says they do (a white Lambertian within 0.3 % of the analytic
+radiance under every light: tests/adapters/test_light_rendering.py). Light through a sphere is
+another matter: an adapter without paths deep enough, or a renderer of other habits, draws a glass
+otherwise whatever its model. So where either side transmits, each adapter's clear glass
+(`Adapter.glasses`) is rendered under each condition the verdict judges: the smooth one where an
+environment lights it (under a point light it is black), the rough one under point lights. Their
+images are compared in 8 x 8 pixel blocks (light through a rough glass comes in rare bright
+samples); beyond the noise and over the threshold, that condition's error is the renderers', not
+the model's. Results are kept for the process: a library's glasses are rendered once."""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+from .engine.results import Agreement, Disagreement
+from .metrics import beyond_noise, relative_rmse
+from .protocol import Adapter, check_image
+from .scene import EnvironmentLight, ProbeScene
+
+BLOCK = 8
+_KEPT: dict[tuple, Disagreement | None] = {}
+
+
+def _blocks(img: np.ndarray) -> np.ndarray:
+    n = img.shape[0] // BLOCK * BLOCK
+    if n == 0:
+        return img.astype(np.float64)
+    return img[:n, :n].astype(np.float64).reshape(n // BLOCK, BLOCK, n // BLOCK, BLOCK, 3).mean(axis=(1, 3))
+
+
+def _pair(adapter: Adapter, kind: str, scenes: tuple[ProbeScene, ProbeScene]) -> tuple[np.ndarray, np.ndarray]:
+    model, given = adapter.glasses[kind]
+    params = adapter.models[model].complete(given)
+    return tuple(_blocks(check_image(adapter.render(model, params, sc), sc, f"adapter {adapter.name!r} {kind} glass"))
+                 for sc in scenes)  # type: ignore[return-value]
+
+
+def compare(one: Adapter, other: Adapter, condition: str, label: str, scenes: tuple[ProbeScene, ProbeScene],
+            threshold: float) -> Disagreement | None:
+    """The two adapters' clear glasses under one condition (two renders each, at these two scenes'
+    seeds): a Disagreement when they differ beyond the noise by more than ``threshold``."""
+    kind = "smooth" if any(isinstance(x, EnvironmentLight) for x in scenes[0].lights) else "rough"
+    key = (one.name, one.identity(), other.name, other.identity(), kind, scenes[0].cache_key(),
+           scenes[1].cache_key(), threshold)
+    if key not in _KEPT:
+        a, b = _pair(one, kind, scenes), _pair(other, kind, scenes)
+        if not (a[0].any() or b[0].any()):
+            _KEPT[key] = None  # black in both: nothing drawn, nothing to disagree on
+        else:
+            err = relative_rmse((a[0] + a[1]) / 2, (b[0] + b[1]) / 2)
+            floor = float(np.hypot(relative_rmse(*a), relative_rmse(*b)) / 2)
+            far = beyond_noise(err, floor)
+            _KEPT[key] = Disagreement(condition=condition, label=label, kind=f"{kind} glass", error=err,
+                                      noise_floor=floor, beyond_noise=far) if far > threshold else None
+    return _KEPT[key]
+
+
+def agreement(source: Adapter, target: Adapter, transmissive: bool,
+              conditions: list[tuple[str, str, tuple[ProbeScene, ProbeScene]]], threshold: float,
+              judged: Callable[[str], bool] = lambda c: True) -> Agreement:
+    """Whether the two adapters agree under these conditions (name, label, two scenes of other seeds)
+    on a material of this kind; ``judged(name)``: whether the verdict judges that condition."""
+    if not transmissive or source is target:
+        return Agreement()
+    lacking = [a.name for a in (source, target) if not {"smooth", "rough"} <= set(a.glasses)]
+    if lacking:
+        return Agreement(unchecked=f"adapter {' and '.join(repr(n) for n in lacking)} declares no clear glasses "
+                                   "(Adapter.glasses), so their light through a sphere is not compared")
+    found = [compare(source, target, name, label, scenes, threshold)
+             for name, label, scenes in conditions if judged(name)]
+    return Agreement(checked=True, disagree=[d for d in found if d is not None])
