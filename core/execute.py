@@ -30,6 +30,7 @@ from .protocol import Adapter
 from .renders import CachedRenderer, ProbeRenders
 from .report import FileRecord, Report, build_report
 from .schemas import Value
+from .findings import SmoothHeld
 from .texturing import Texturing, texture_result, textured_findings
 
 
@@ -119,13 +120,15 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
     renders = ProbeRenders(source, resolved.source_params, resolved.source_spec, target, fit.scene, given=job.scene,
                            given_noise=fit.scene_noise)
     informed = job.settings.start == "informed" and job.lookup is None and job.start is None
-    start = informed_start(resolved, adapters) if informed else given_start(resolved)
-    free = fitted(resolved, start) if job.lookup is None else []
+    smooth = smooth_held(resolved) if job.lookup is None else {}
+    start = {**(informed_start(resolved, adapters) if informed else given_start(resolved)), **smooth}
+    free = [p for p in fitted(resolved, start) if p not in smooth] if job.lookup is None else []
     # A textured source is a lookup (nothing fitted): its maps and their check come first, for the verdict.
     texturing = texture_result(resolved, adapters[src.adapter], adapters[tgt.adapter], dict(resolved.base)) \
         if src.textures else None
     notes = lookup_notes(job) + (textured_findings(texturing.record, job.settings.threshold,
-                                                   job.settings.resolve_limit) if texturing else [])
+                                                   job.settings.resolve_limit) if texturing else []) + \
+        ([SmoothHeld(held=smooth)] if smooth else [])
     result = remap(resolved.target_spec, {**resolved.base, **start}, free, renders, job.settings, job.tuning,
                    progress, alternatives=alternatives(resolved, start) if informed else [], notes=notes)
     files = artifacts(adapters[tgt.adapter], tgt.model, result.params, renders.source_image(), result.target_image,
@@ -217,6 +220,16 @@ def informed_start(resolved: Resolved, adapters: AdapterPool) -> dict[str, Value
         if all(map(math.isfinite, v if isinstance(v, tuple) else (v,))):  # type: ignore[arg-type]
             out[name] = v
     return out
+
+
+def smooth_held(resolved: Resolved) -> dict[str, float]:
+    """For a perfectly smooth source, the values that make the target perfectly smooth
+    (`ModelSpec.smooth_when`: roughness 0) that the user did not fix: held there, not fitted. Under
+    the studio a fit cannot tell roughness 0 from 0.016, and a point light shows the difference
+    (a smooth plastic: 19 % under the headlight)."""
+    if not resolved.source_spec.is_smooth(resolved.source_params):
+        return {}
+    return {k: v for k, v in resolved.target_spec.smooth_when.items() if k not in resolved.fixed}
 
 
 def given_start(resolved: Resolved) -> dict[str, Value]:

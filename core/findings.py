@@ -326,6 +326,18 @@ class ChoiceTried(_Note):
         return f"the source does not say which to use: tried {tried} at {self.resolution} px; kept {self.chosen}"
 
 
+class SmoothHeld(_Note):
+    """A perfectly smooth source: the target held perfectly smooth where its model can be."""
+
+    kind: Literal["smooth_held"] = "smooth_held"
+    held: dict[str, float]
+
+    def sentence(self) -> str:
+        values = ", ".join(f"{k} {v:g}" for k, v in self.held.items())
+        return (f"the source is perfectly smooth: the target's {values} held (an environment hardly tells a mirror "
+                "from a nearly smooth one; a point light does)")
+
+
 class SchemeChosen(_Note):
     kind: Literal["scheme_chosen"] = "scheme_chosen"
     scheme: str
@@ -391,7 +403,7 @@ Finding = Annotated[
           CannotResolve, ImagePrecision, NoEffect, IllConditioned,
           NotAtMinimum,
           PinnedOnBound, RendererAlters, ValidationSkipped, NothingFitted, TableLookup, TexturedAbove, TexturedNotes,
-          StartKept, ChoiceTried, SchemeChosen, DeadParameters,
+          StartKept, ChoiceTried, SmoothHeld, SchemeChosen, DeadParameters,
           JointRefined, PredictionNotRealised, NoisePolished],
     Field(discriminator="kind"),
 ]

@@ -72,16 +72,26 @@ class Runner:
             else:
                 why = stored.problem or ("its inputs, the engine or a renderer changed" if stored.report else "")
                 todo.append((i, t, why if self.reuse else ""))
+        first: dict[str, _Todo] = {}
+        twins: dict[int, list[_Todo]] = {}  # the same job in other slots (a library's shared material): run once
+        for item in todo:
+            key = item[1].job.key()
+            if key in first:
+                twins.setdefault(first[key][0], []).append(item)
+            else:
+                first[key] = item
         bar = _Bar(len(tasks), len(found), self.quiet, self.workers.where)
         try:
             for i in sorted(found):
                 bar.finished(self._line(found[i], bar))
-            self._run_todo(todo, found, bar)
+            self._run_todo(list(first.values()), found, bar, twins)
         finally:
             bar.close()
         return [found[i] for i in range(len(tasks))]
 
-    def _run_todo(self, todo: list[_Todo], found: dict[int, Done], bar: "_Bar") -> None:
+    def _run_todo(self, todo: list[_Todo], found: dict[int, Done], bar: "_Bar",
+                  twins: dict[int, list[_Todo]] | None = None) -> None:
+        twins = twins or {}
         queue, flight = list(todo), {}
         failure: BaseException | None = None
         try:
@@ -100,13 +110,19 @@ class Runner:
                 for fut in ready:
                     i, t, why = flight.pop(fut)
                     try:
-                        found[i] = self._finish(fut, t, why)
+                        found[i], outcome = self._finish(fut, t, why)
+                        for j, twin, twin_why in twins.get(i, []):
+                            self.store.save(twin.slot, outcome)
+                            found[j] = Done(twin, outcome.report, resumed=False, redone=twin_why)
                     except RemapError as exc:
                         if self.stop_on_error:
                             failure = failure or exc
                             continue
-                        found[i] = Done(t, None, resumed=False, redone=why, error=str(exc))
-                    bar.finished(self._line(found[i], bar))
+                        for j, twin, twin_why in [(i, t, why), *twins.get(i, [])]:
+                            found[j] = Done(twin, None, resumed=False, redone=twin_why, error=str(exc))
+                    for j in [i, *(k for k, _, _ in twins.get(i, []))]:
+                        if j in found:
+                            bar.finished(self._line(found[j], bar))
         except BaseException:
             for fut in flight:
                 fut.cancel()
@@ -119,7 +135,8 @@ class Runner:
             return self.workers.executor.submit(run_job, t.job, self.renderer_files, self.render_progress)
         return self.workers.executor.submit(run_job, t.job, self.renderer_files)
 
-    def _finish(self, fut: cf.Future, t: Task, why: str) -> Done:
+    def _finish(self, fut: cf.Future, t: Task, why: str):
+        """(Done, the job's Outcome), its result stored in the task's slot."""
         try:
             outcome = fut.result()
         except worker_deaths() as exc:
@@ -130,7 +147,7 @@ class Runner:
                               f"{outcome.report.engine}, adapters {theirs.versions}; here: {t.job.versions}): "
                               "install the same brdf-remap and renderers on every worker")
         self.store.save(t.slot, outcome)
-        return Done(t, outcome.report, resumed=False, redone=why)
+        return Done(t, outcome.report, resumed=False, redone=why), outcome
 
     def _line(self, done: Done, bar: "_Bar") -> str:
         return self.line(done, bar.done + 1, bar.total) if self.line else ""
