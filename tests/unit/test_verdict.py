@@ -22,9 +22,10 @@ def _check(name, error, floor):
                  perceptual=1.0, noise_floor=floor, beyond_noise=max(0.0, error**2 - floor**2) ** 0.5)
 
 
-def _judge(error, floor, checks=(), fitted=True, agreement=None):
+def _judge(error, floor, checks=(), fitted=True, agreement=None, predicted=None):
     ev = Evidence(error=error, noise_floor=floor, threshold=0.05, resolve_limit=0.10,
-                  assessment=Assessment(condition=10.0, no_effect=False), stages=[CONVERGED], cond_limit=1e4,
+                  assessment=Assessment(condition=10.0, no_effect=False, predicted=predicted), stages=[CONVERGED],
+                  cond_limit=1e4,
                   renderer_notes=[], fitted=fitted, validation=Validation(checks=list(checks)),
                   agreement=agreement or Agreement())
     return judge(ev, [])
@@ -164,3 +165,9 @@ def test_a_lookup_about_as_close_as_the_tables_fits_is_a_mismatch_not_a_failure(
     assert near.status == "mismatch" and "about what the table's direct fits reach here (15.0%)" in near.reason
     assert judged(0.30, 0.15).status == "unreliable" and judged(0.03, 0.15).status == "ok"
     assert not any(f.kind == "nothing_fitted" for f in near.findings)
+
+
+def test_a_joint_step_predicting_less_than_the_noise_is_not_a_finding():
+    assert _judge(0.0224, 0.0204, predicted=0.006).status == "ok"  # a mirror: 1.6 % to gain, 2.0 % noise
+    v = _judge(0.04, 0.005, predicted=0.01)
+    assert v.status == "unreliable" and "not at a minimum" in v.reason
