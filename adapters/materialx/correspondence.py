@@ -40,6 +40,10 @@ TO_PRINCIPLED: dict[str, dict[str, tuple[str, ...]]] = {
     "UsdPreviewSurface": {"base_color": ("diffuseColor",), "metallic": ("metallic",), "roughness": ("roughness",),
                           "ior": ("ior",), "coat_weight": ("clearcoat",), "coat_roughness": ("clearcoatRoughness",)},
 }
+TRANSMISSION_TINT = {"open_pbr_surface": "transmission_color", "standard_surface": "transmission_color"}
+"""Shaders whose transmitted light has a colour of its own: Blender's Principled BSDF tints it by
+Base Color, so a glass's Base Color is this colour (mixed with the base colour by the
+transmission weight). glTF and UsdPreviewSurface tint it by the base colour, as Blender does."""
 HALF = {"specular_ior_level"}
 SCALE = {"anisotropic": 1.0 / 0.9}
 """Principled parameters that are the shader's value times this: MaterialX's roughness anisotropy
@@ -61,6 +65,7 @@ def open_pbr_inputs(params: dict) -> dict[str, object]:
             "fuzz_weight": params["sheen_weight"], "fuzz_color": tuple(params["sheen_tint"]),
             "fuzz_roughness": params["sheen_roughness"], "specular_roughness_anisotropy": 0.9 * params["anisotropic"],
             "transmission_weight": params["transmission_weight"], "subsurface_weight": params["subsurface_weight"],
+            "transmission_color": tuple(params["base_color"]),  # what Blender tints a glass by
             "base_diffuse_roughness": params["diffuse_roughness"]}
 
 

@@ -13,7 +13,7 @@ from brdfremap.core.library.formats import Entry, clip_into
 from brdfremap.core.schemas import Material
 from brdfremap.core.textures import colour_to_linear
 
-from .correspondence import HALF, SCALE, QUIET, TO_PRINCIPLED
+from .correspondence import HALF, SCALE, QUIET, TO_PRINCIPLED, TRANSMISSION_TINT
 from .versions import upgrade_inputs
 
 NOTE = ("read as Blender Cycles' Principled BSDF by the {shader} correspondence (Blender's Principled BSDF "
@@ -112,6 +112,14 @@ def _principled(shader, category: str) -> tuple[dict, list[str], list[str]]:
         if len(vals) == 2:  # a colour times its weight
             v = tuple(c * float(vals[1]) for c in v)
         params[pname] = v / 2.0 if pname in HALF else v * SCALE[pname] if pname in SCALE else v
+    tint = TRANSMISSION_TINT.get(category)
+    weight = float(params.get("transmission_weight", 0.0))
+    if tint is not None and weight > 0.0:
+        # Blender's Principled BSDF tints its transmission by Base Color; these shaders by a colour of its own.
+        colour = value(tint)
+        params["base_color"] = tuple((1 - weight) * b + weight * t for b, t in zip(params["base_color"], colour))
+        notes.append(f"transmission_weight {weight:g}: Base Color takes {tint} ({', '.join(f'{x:.4g}' for x in colour)})"
+                     " in that proportion, as Blender's Principled BSDF tints what it transmits by Base Color")
     notes += clip_into(PRINCIPLED, params) + _unused(shader, nodedef, used)
     return params, textured, notes
 

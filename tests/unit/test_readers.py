@@ -136,3 +136,12 @@ def test_a_file_that_cannot_be_read_is_listed_and_the_others_are_read(tmp_path, 
     assert got["a_broken"].unreadable and "line 3" in got["a_broken"].problem and "no_such_input" in \
         got["a_broken"].problem
     assert got["Tire"].material is not None
+
+
+def test_a_materialx_glass_is_tinted_by_its_transmission_colour(formats):
+    """OpenPBR and Standard Surface tint a glass by transmission_color; Blender's Principled BSDF by
+    Base Color: a clear water stays clear (not the default base colour's 0.8 grey)."""
+    water = _read(formats, DATA / "openpbr" / "open_pbr_water.mtlx")["Water"].material.params
+    assert water["base_color"] == (1.0, 1.0, 1.0) and water["transmission_weight"] == 1.0
+    honey = _read(formats, DATA / "openpbr" / "open_pbr_honey_liquid.mtlx")["Honey_liquid"].material.params
+    assert honey["base_color"] == pytest.approx((0.8309, 0.5709, 0.0372), abs=2e-4)  # its ACEScg colour, linear Rec.709
