@@ -9,7 +9,7 @@ otherwise whatever its model. So where either side transmits, each adapter's cle
 environment lights it (under a point light it is black), the rough one under point lights. Their
 images are compared in 8 x 8 pixel blocks (light through a rough glass comes in rare bright
 samples); beyond the noise and over the threshold, that condition's error is the renderers', not
-the model's. Results are kept for the process: a library's glasses are rendered once."""
+the model's. Measurements are kept for the process: a library's glasses are rendered once."""
 
 from __future__ import annotations
 
@@ -23,7 +23,10 @@ from .protocol import Adapter, check_image
 from .scene import EnvironmentLight, ProbeScene
 
 BLOCK = 8
-_KEPT: dict[tuple, Disagreement | None] = {}
+_MEASURED: dict[tuple, tuple[float, float]] = {}
+"""(error, noise floor) of two adapters' glasses at two scenes, kept for the process (a library's
+glasses are rendered once); at most `KEEP` entries."""
+KEEP = 256
 
 
 def _blocks(img: np.ndarray) -> np.ndarray:
@@ -45,19 +48,22 @@ def compare(one: Adapter, other: Adapter, condition: str, label: str, scenes: tu
     """The two adapters' clear glasses under one condition (two renders each, at these two scenes'
     seeds): a Disagreement when they differ beyond the noise by more than ``threshold``."""
     kind = "smooth" if any(isinstance(x, EnvironmentLight) for x in scenes[0].lights) else "rough"
-    key = (one.name, one.identity(), other.name, other.identity(), kind, scenes[0].cache_key(),
-           scenes[1].cache_key(), threshold)
-    if key not in _KEPT:
+    key = (one.name, one.identity(), other.name, other.identity(), kind, scenes[0].cache_key(), scenes[1].cache_key())
+    if key not in _MEASURED:
         a, b = _pair(one, kind, scenes), _pair(other, kind, scenes)
-        if not (a[0].any() or b[0].any()):
-            _KEPT[key] = None  # black in both: nothing drawn, nothing to disagree on
+        if len(_MEASURED) >= KEEP:
+            _MEASURED.pop(next(iter(_MEASURED)))
+        if a[0].any() or b[0].any():
+            _MEASURED[key] = (relative_rmse((a[0] + a[1]) / 2, (b[0] + b[1]) / 2),
+                              float(np.hypot(relative_rmse(*a), relative_rmse(*b)) / 2))
         else:
-            err = relative_rmse((a[0] + a[1]) / 2, (b[0] + b[1]) / 2)
-            floor = float(np.hypot(relative_rmse(*a), relative_rmse(*b)) / 2)
-            far = beyond_noise(err, floor)
-            _KEPT[key] = Disagreement(condition=condition, label=label, kind=f"{kind} glass", error=err,
-                                      noise_floor=floor, beyond_noise=far) if far > threshold else None
-    return _KEPT[key]
+            _MEASURED[key] = (0.0, 0.0)  # black in both: nothing drawn, nothing to disagree on
+    err, floor = _MEASURED[key]
+    far = beyond_noise(err, floor)
+    if far <= threshold:
+        return None
+    return Disagreement(condition=condition, label=label, kind=f"{kind} glass", error=err, noise_floor=floor,
+                        beyond_noise=far)
 
 
 def agreement(source: Adapter, target: Adapter, transmissive: bool,

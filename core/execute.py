@@ -225,8 +225,7 @@ def informed_start(resolved: Resolved, adapters: AdapterPool) -> dict[str, Value
 def smooth_held(resolved: Resolved) -> dict[str, float]:
     """For a perfectly smooth source, the values that make the target perfectly smooth
     (`ModelSpec.smooth_when`: roughness 0) that the user did not fix: held there, not fitted. Under
-    the studio a fit cannot tell roughness 0 from 0.016, and a point light shows the difference
-    (a smooth plastic: 19 % under the headlight)."""
+    the studio a fit hardly tells roughness 0 from a little more, which a point light shows."""
     if not resolved.source_spec.is_smooth(resolved.source_params):
         return {}
     return {k: v for k, v in resolved.target_spec.smooth_when.items() if k not in resolved.fixed}

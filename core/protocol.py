@@ -38,6 +38,8 @@ class Adapter(abc.ABC):
     install_hint: ClassVar[str] = ""
     models: ClassVar[dict[str, ModelSpec]] = {}
     light_types: ClassVar[frozenset[str]] = frozenset({"point"})
+    """The light types of `core.scene` this adapter realises, in the same units and orientation
+    as every other (its calibration tests cover each)."""
     textures: ClassVar[bool] = False
     """Whether it renders textures (`render_textured`) and writes them into its native files, for the
     parameters each model lists as `texturable`."""
@@ -48,8 +50,6 @@ class Adapter(abc.ABC):
     """Clear glasses of IOR 1.5 (model, params) by kind: "smooth" (perfectly smooth), "rough" (GGX,
     α 0.1). An adapter that declares them renders light through a sphere (`ModelSpec.transmits`);
     `remap check` and the verdict compare them with another adapter's."""
-    """The light types of `core.scene` this adapter realises, in the same units and orientation
-    as every other (its calibration tests cover each)."""
 
     @classmethod
     def scene_problem(cls, scene: ProbeScene) -> str | None:

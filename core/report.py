@@ -201,6 +201,15 @@ def build_report(resolved: Resolved, result: EngineResult, *, start: dict, deriv
         host={"python": platform.python_version(), "machine": platform.machine()}, files=files, textures=textures)
 
 
+def for_job(report: Report, job: Job) -> Report:
+    """A result under another job of the same key: the same material met again elsewhere (in
+    another file of a library), its result the same, its labels that job's own."""
+    if job.key() != report.key:
+        raise ValueError("for_job: the job's key is not the report's")
+    return report.model_copy(update={"job": job, "source": report.source.model_copy(update={
+        "file": job.label, "name": job.source.name})})
+
+
 def _finite(x: float | None) -> float | None:
     return x if x is not None and math.isfinite(x) else None
 

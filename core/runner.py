@@ -10,7 +10,7 @@ from __future__ import annotations
 import concurrent.futures as cf
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable
 
 from . import interrupt
@@ -19,7 +19,7 @@ from .errors import ConfigError, RemapError, RenderError
 from .execute import run_job
 from .executors import Workers, worker_deaths
 from .job import Job
-from .report import Report
+from .report import Report, for_job
 from .store import Store
 
 
@@ -109,20 +109,12 @@ class Runner:
                 interrupt.check()  # a Ctrl-C a renderer swallowed still stops the run here
                 for fut in ready:
                     i, t, why = flight.pop(fut)
-                    try:
-                        found[i], outcome = self._finish(fut, t, why)
-                        for j, twin, twin_why in twins.get(i, []):
-                            self.store.save(twin.slot, outcome)
-                            found[j] = Done(twin, outcome.report, resumed=False, redone=twin_why)
-                    except RemapError as exc:
-                        if self.stop_on_error:
+                    for j, done, exc in self._collect(fut, (i, t, why), twins.get(i, [])):
+                        if exc is not None and self.stop_on_error:
                             failure = failure or exc
                             continue
-                        for j, twin, twin_why in [(i, t, why), *twins.get(i, [])]:
-                            found[j] = Done(twin, None, resumed=False, redone=twin_why, error=str(exc))
-                    for j in [i, *(k for k, _, _ in twins.get(i, []))]:
-                        if j in found:
-                            bar.finished(self._line(found[j], bar))
+                        found[j] = done
+                        bar.finished(self._line(done, bar))
         except BaseException:
             for fut in flight:
                 fut.cancel()
@@ -134,6 +126,25 @@ class Runner:
         if self.workers.in_process:
             return self.workers.executor.submit(run_job, t.job, self.renderer_files, self.render_progress)
         return self.workers.executor.submit(run_job, t.job, self.renderer_files)
+
+    def _collect(self, fut: cf.Future, todo: _Todo, twins: list[_Todo]) -> list[tuple[int, Done, RemapError | None]]:
+        """The finished job's Done, and its twins': each stored in its own slot under its own labels
+        (`report.for_job`), with the error that stopped it; the job's failure is its twins' too, and
+        a twin that cannot be stored fails alone."""
+        i, t, why = todo
+        try:
+            done, outcome = self._finish(fut, t, why)
+        except RemapError as exc:
+            return [(j, Done(x, None, resumed=False, redone=w, error=str(exc)), exc) for j, x, w in [todo, *twins]]
+        out: list[tuple[int, Done, RemapError | None]] = [(i, done, None)]
+        for j, twin, twin_why in twins:
+            try:
+                mine = replace(outcome, report=for_job(outcome.report, twin.job))
+                self.store.save(twin.slot, mine)
+                out.append((j, Done(twin, mine.report, resumed=False, redone=twin_why), None))
+            except RemapError as exc:
+                out.append((j, Done(twin, None, resumed=False, redone=twin_why, error=str(exc)), exc))
+        return out
 
     def _finish(self, fut: cf.Future, t: Task, why: str):
         """(Done, the job's Outcome), its result stored in the task's slot."""

@@ -15,9 +15,9 @@ from .textures import Texture
 Value = float | tuple[float, float, float] | str
 LOBES = ("diffuse", "specular")
 TRANSMISSION_DEPTH = 12
-"""The longest light path (segments from the camera, Mitsuba's `max_depth`) an adapter traces for a
-transmissive material: in, through, out, and the internal reflections that matter (each keeps a
-few percent). Every adapter renders opaque materials with direct light alone (a convex sphere
+"""The longest light path an adapter traces for a transmissive material, in segments from the
+camera to the light (the camera's own included): in, through, out, and the internal reflections
+that matter (each keeps a few percent). Every adapter renders opaque materials with direct light alone (a convex sphere
 lights nothing of itself)."""
 
 
@@ -235,8 +235,8 @@ class ModelSpec(_Strict):
 
     def settle(self, given: dict[str, Any], *, file: str | None = None, prefix: str = "params") -> dict[str, Any]:
         """``given`` with the choices its values imply: a value away from its default that counts only
-        with one value of a choice the file leaves unsaid sets that choice (alpha_u and alpha_v mean
-        anisotropic, as in Mitsuba's own files); one whose choice the file sets otherwise, or two
+        with one value of a choice the file leaves unsaid sets that choice (an anisotropic roughness
+        along and across means anisotropic); one whose choice the file sets otherwise, or two
         that need different values of one choice, is a ConfigError naming both. Nothing given is
         dropped without a word."""
         out = dict(given)

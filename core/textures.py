@@ -122,8 +122,8 @@ def colour_to_linear(rgb: tuple[float, float, float], space: str, where: str = "
     import OpenImageIO as oiio
 
     if not oiio.ColorConfig("ocio://default").getColorSpaceIndex(space) >= 0:
-        raise ConfigError(f"colour space {space!r} is not known to OpenColorIO's built-in configuration"
-                          + (f" ({where})" if where else ""))
+        raise ConfigError(f"{where + ': ' if where else ''}colour space {space!r} is not known to OpenColorIO's "
+                          "built-in configuration (use one of MaterialX's: lin_rec709, srgb_texture, acescg ...)")
     px = _convert(np.array([[rgb]], np.float32), space, LINEAR)
     return tuple(float(x) for x in px[0, 0, :3])  # type: ignore[return-value]
 

@@ -255,10 +255,11 @@ class BlenderState:
         from brdfremap.adapters.cycles.material import NODES, enum_value, socket, socket_value
 
         _, inputs, props = NODES[model]
+        from brdfremap.adapters.cycles.models import MODELS
+
         for pname, prop in props.items():
-            if pname not in params:  # a caller naming fewer (cycles-subprocess.yaml) leaves Blender's default
-                continue
-            value = enum_value(params[pname])
+            # A caller naming fewer (cycles-subprocess.yaml) gets the model's default, not the last request's.
+            value = enum_value(params.get(pname, MODELS[model].param(pname).default))
             if getattr(bsdf, prop) != value:
                 setattr(bsdf, prop, value)
         for pname, sock in inputs.items():

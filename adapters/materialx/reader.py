@@ -67,7 +67,10 @@ class MaterialXReader:
         if category not in TO_PRINCIPLED:
             return Entry(name=name, file=file, problem=f"shader {category!r} has no correspondence here (known: "
                                                         f"{', '.join(TO_PRINCIPLED)})")
-        params, textured, notes = _principled(shader, category)
+        try:
+            params, textured, notes = _principled(shader, category)
+        except ConfigError as exc:  # one material's value (an unknown colour space): that material, not the file
+            return Entry(name=name, file=file, problem=str(exc))
         notes[:0] = [NOTE.format(shader=category), *upgraded.get(shader.getName(), [])]
         textures = _textures(shader, category, name, notes)
         return Entry(name=name, file=file, notes=notes, textured=textured,
@@ -183,16 +186,22 @@ WORKING = ("lin_rec709", "lin_srgb")
 
 
 def _line_of(path: Path, message: str) -> str | None:
-    """'line N' of the element a MaterialX message names (`name="..."`), or None."""
-    found = re.search(r'name="([^"]+)"', message)
-    if not found:
+    """'line N' of what a MaterialX message names: the element (`name="..."`), and within it the
+    input it quotes ('specular_anisotropy'), where the file shows them; else None."""
+    element = re.search(r'name="([^"]+)"', message)
+    if not element:
         return None
     try:
         lines = path.read_text(errors="replace").splitlines()
     except OSError:
         return None
-    key = f'name="{found.group(1)}"'
-    return next((f"line {i}" for i, line in enumerate(lines, 1) if key in line), None)
+    at = next((i for i, line in enumerate(lines) if f'name="{element.group(1)}"' in line), None)
+    if at is None:
+        return None
+    quoted = re.search(r"Input '([^']+)'", message)
+    if quoted:
+        at = next((i for i in range(at, len(lines)) if f'name="{quoted.group(1)}"' in lines[i]), at)
+    return f"line {at + 1}"
 
 
 def _r(x) -> float:

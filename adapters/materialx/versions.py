@@ -34,8 +34,9 @@ DROPPED: dict[str, dict[str, str]] = {
 
 def upgrade_inputs(shader) -> list[str]:
     """Rename, in place, the inputs of a MaterialX shader node that an earlier version of its
-    standard names otherwise, and remove the ones it dropped, where the node's definition lacks
-    them; return a note for each."""
+    standard names otherwise (where the node has no input of the new name already), and remove
+    the ones a later version dropped; return a note for each. Every name here is absent from the
+    shader's current definition, so a current document is left as it is."""
     category = shader.getCategory()
     renamed, dropped = RENAMED.get(category, {}), DROPPED.get(category, {})
     notes = []

@@ -68,8 +68,8 @@ class _Document:
         if self.root.tag != "scene":
             raise ConfigError(f"the root element is <{self.root.tag}>, not <scene>: not a Mitsuba scene", file=str(path))
         self.search = [path.parent]
-        """Where file names are looked up, as Mitsuba's file resolver does: the scene's folder, then
-        each `<path>` (relative to the file that gives it)."""
+        """Where file names are looked up, as Mitsuba's file resolver does: each `<path>` (relative to
+        the file that gives it; the last first), then the scene's folder."""
         self._paths(self.root, path)
         self._inline(self.root, path, depth=0)
         defaults = {d.get("name", ""): d.get("value", "") for d in self.root.findall("default")}
@@ -94,7 +94,9 @@ class _Document:
                 parent.insert(i + j, e)
 
     def _paths(self, root: ET.Element, path: Path) -> None:
-        self.search += [path.parent / p.get("value", "") for p in root.findall("path")]
+        # Mitsuba puts each <path> ahead of what it had (the last given is looked in first).
+        for p in root.findall("path"):
+            self.search.insert(0, path.parent / p.get("value", ""))
 
     def find(self, name: str) -> Path:
         """A file the scene names, found as Mitsuba finds it (the first search folder that has it);
@@ -301,6 +303,9 @@ def _textured_input(doc: _Document, prop: ET.Element, name: str, spec, notes: li
     tex = doc.ref(prop) if prop.tag == "ref" else prop
     kind = spec.param(name).kind
     if tex.get("type") == "checkerboard":
+        if any(c.tag in ("texture", "ref") for c in tex):
+            notes.append(f"{name}: a checkerboard of textures is read as the model's default")
+            return None, None
         colours = {c.get("name"): _value(doc, c, f"{name}.{c.get('name')}", notes) for c in tex
                    if c.get("name") in ("color0", "color1")}
         c0, c1 = (_rgb(colours.get(k, d)) for k, d in (("color0", 0.4), ("color1", 0.2)))
@@ -327,7 +332,12 @@ def _textured_input(doc: _Document, prop: ET.Element, name: str, spec, notes: li
 
 
 def _rgb(v) -> tuple[float, float, float]:
-    return tuple(v) if isinstance(v, tuple) else (float(v),) * 3  # type: ignore[return-value]
+    if isinstance(v, tuple):
+        return v  # type: ignore[return-value]
+    try:
+        return (float(v),) * 3
+    except (TypeError, ValueError):
+        raise ConfigError(f"{v!r} is not a colour (give a number, an <rgb> or a <spectrum>)") from None
 
 
 def _shown(v) -> str:

@@ -96,7 +96,7 @@ def _integrated(wl: list[float], vals: list[float], name: str, what: str) -> Rea
         rgb = tuple(float(x) for x in mi.scalar_rgb.spectrum_list_to_srgb(wl, vals, bounded, True))
     finally:
         logger.set_log_level(level)
-    clamped = any(c == 0.0 for c in rgb) or (bounded and any(c == 1.0 for c in rgb))
+    clamped = bounded and any(c == 1.0 for c in rgb)  # (a channel below 0 is clamped too: 0 cannot tell)
     shown = ", ".join(f"{c:.4g}" for c in rgb)
     return Reading(rgb, f"{name}: {what} turned into RGB ({shown}) as Mitsuba's RGB variants do (CIE 1931, "  # type: ignore[arg-type]
                         f"D65, linear sRGB{'' if bounded else ', unbounded'})"

@@ -51,12 +51,13 @@ def _check(adapter, model, spec, p) -> str | None:
     for others in _settings(spec, p):
         try:
             params = spec.complete(spec.settle({**others, p.name: _moved(p)}))
-            if spec.is_inert(p.name, params):  # declared: then it must count once the condition is lifted
-                others = {**others, **{k: _moved(spec.param(k)) for k in p.inert_when}}
-                params = spec.complete(spec.settle({**others, p.name: _moved(p)}))
-            base = {**spec.complete(spec.settle(others)), p.name: p.default}
-        except ConfigError:
+        except ConfigError as exc:  # refused: in one line naming the value
+            assert p.name in str(exc) and "\n" not in str(exc), str(exc)
             return None
+        if spec.is_inert(p.name, params):  # declared: then it must count once the condition is lifted
+            others = {**others, **{k: _moved(spec.param(k)) for k in p.inert_when}}
+            params = spec.complete(spec.settle({**others, p.name: _moved(p)}))
+        base = {**params, p.name: p.default}  # the choices it implied kept: only the value itself differs
         if not np.array_equal(adapter.render(model, params, SCENE), adapter.render(model, base, SCENE)):
             return None
     return f"{model}.{p.name} = {_moved(p)} renders as the default"

@@ -162,3 +162,21 @@ def test_bad_input_is_exit_2_and_one_line(tmp_path, args, words):
     one_line_error(remap("convert", tmp_path / "broken.xml", "--to", "mitsuba", "--out", tmp_path / "o"),
                    "broken.xml: line 1", "malformed XML")
     assert not (tmp_path / "o").exists()
+
+
+def test_one_material_in_two_files_is_fitted_once_and_kept_under_each_name(tmp_path, mitsuba_adapter):
+    """A library's shared material (the corpus's ground plane is in 35 files): one job, its result in
+    each material's folder under that material's own file and name; a rerun resumes both."""
+    for name in ("a", "b"):
+        (tmp_path / f"{name}.xml").write_text("<scene version='3.0.0'><bsdf type='roughplastic' id='grey'>"
+                                              "<rgb name='diffuse_reflectance' value='0.4'/></bsdf></scene>")
+    out = tmp_path / "lib"
+    args = ["convert", str(tmp_path / "a.xml"), str(tmp_path / "b.xml"), "--to", "mitsuba", "--out", str(out), *FAST]
+    assert main(args) == 0
+    rows = {m["name"]: m for m in _summary(out)["materials"]}
+    reports = {n: read_result(out / "materials" / m["slot"] / "result.json") for n, m in rows.items()}
+    assert set(reports) == {"a/grey", "b/grey"} and reports["a/grey"]["key"] == reports["b/grey"]["key"]
+    assert [reports[n]["source"]["file"].split(":")[0] for n in ("a/grey", "b/grey")] == [
+        str(tmp_path / "a.xml"), str(tmp_path / "b.xml")]
+    assert reports["a/grey"]["seconds"] == reports["b/grey"]["seconds"]  # one fit, kept twice
+    assert main(args) == 0 and all(m["resumed"] for m in _summary(out)["materials"])

@@ -133,7 +133,7 @@ def test_a_file_that_cannot_be_read_is_listed_and_the_others_are_read(tmp_path, 
     with pytest.raises(ConfigError, match="a_broken.mtlx"):
         read_all(paths, formats)
     got = {e.name: e for e in read_all(paths, formats, keep_going=True)}
-    assert got["a_broken"].unreadable and "line 3" in got["a_broken"].problem and "no_such_input" in \
+    assert got["a_broken"].unreadable and "line 4" in got["a_broken"].problem and "no_such_input" in \
         got["a_broken"].problem
     assert got["Tire"].material is not None
 
