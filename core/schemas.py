@@ -57,6 +57,9 @@ class ParamSpec(_Strict):
                                           "values (Principled's Specular IOR Level once Metallic is 1): a fit "
                                           "that has settled them there need not render this parameter's "
                                           "Jacobian column.")
+    fit_when: dict[str, float] = Field(
+        default_factory=dict, description="Fitted (though `fit` is false) while these numeric parameters take these "
+                                          "values: a glass's IOR, which refracts what it transmits.")
     held_when: dict[str, float] = Field(
         default_factory=dict, description="Not fitted while these numeric parameters take these values (a glass's "
                                           "colour and metalness, which the probe's black background hides): held at "
@@ -280,8 +283,8 @@ class ModelSpec(_Strict):
         return [
             p.name
             for p in self.parameters
-            if p.kind != "choice" and p.fit and p.name not in fixed and self.is_active(p.name, params)
-            and not (p.held_when and all(params.get(k) == v for k, v in p.held_when.items()))
+            if p.kind != "choice" and (p.fit or _holds(p.fit_when, params)) and p.name not in fixed
+            and self.is_active(p.name, params) and not _holds(p.held_when, params)
         ]
 
     def with_lobe(self, params: dict[str, Value], lobe: str | None) -> dict[str, Value]:
@@ -301,6 +304,11 @@ class Material(_Strict):
     textures: dict[str, Texture] = Field(default_factory=dict, description="Parameters driven by an image, texel by "
                                                                             "texel (its `params` value is the one "
                                                                             "used without the texture).")
+
+
+def _holds(when: dict[str, float], params: dict[str, Any]) -> bool:
+    """Whether every parameter named takes its value (False for an empty condition)."""
+    return bool(when) and all(params.get(k) == v for k, v in when.items())
 
 
 def _same(a: Any, b: Any) -> bool:

@@ -114,7 +114,9 @@ class CyclesAdapter(Adapter):
     install_hint = "pip install 'brdf-remap[cycles]' (bpy 5.0, Python 3.11)"
     models = MODELS
     light_types = frozenset({"point", "environment"})
-    version = "2"  # 2: paths through a transmissive sphere (bounces, the mesh probe, no clamping); the subsurface method
+    # 2: paths through a transmissive sphere (bounces, the mesh probe, no clamping), the subsurface method;
+    # 3: a glass fits its IOR (its Specular IOR Level held).
+    version = "3"
     calibration = ("diffuse", {"color": 0.8})
     # Principled glass: Base Color tints the transmitted light (white: clear), GGX as Mitsuba's.
     glasses = {kind: ("principled", {"transmission_weight": 1.0, "base_color": 1.0, "ior": 1.5, "distribution": "ggx",

@@ -46,9 +46,10 @@ PRINCIPLED = ModelSpec(
         _unit("metallic", 0.0, desc="Metallic.", held_when=GLASS),
         _unit("roughness", 0.5, desc="Roughness (α = roughness²)."),
         ParamSpec(name="ior", kind="scalar", lower=1.0, upper=3.0, default=1.5, fit=False, inert_when=METAL,
-                  description="IOR of the dielectric specular (use Specular IOR Level to fit F0)."),
-        _unit("specular_ior_level", 0.5, upper=1.0, desc="Specular IOR Level (0.5 = the IOR as given).",
-              inert_when=METAL),
+                  fit_when=GLASS, description="IOR of the dielectric specular (use Specular IOR Level to fit F0; "
+                                              "a glass's is fitted: it refracts what the glass transmits)."),
+        _unit("specular_ior_level", 0.5, upper=1.0, desc="Specular IOR Level (0.5 = the IOR as given; a glass "
+              "ignores it).", inert_when=METAL, held_when=GLASS),
         ParamSpec(name="specular_tint", kind="rgb", default=(1.0, 1.0, 1.0), fit=False, description="Specular Tint."),
         _unit("anisotropic", 0.0, fit=False, fit_when_carried=True, desc="Anisotropic (the probe's tangent runs "
               "along the sphere's latitudes, its pole at the image's top)."),
