@@ -57,8 +57,9 @@ class Appearance(_Strict):
     sheen: Sheen | None = Field(None, description="A sheen, if one.")
     transmission: float = Field(0.0, ge=0.0, le=1.0, description="Fraction of the dielectric lobe transmitted "
                                                                  "(glass: 1).")
-    transmittance: RGB = Field((1.0, 1.0, 1.0), description="Colour of the transmitted light (the probe cannot "
-                                                            "see it: carried as read).")
+    transmittance: RGB = Field((1.0, 1.0, 1.0), description="The colour light takes through the sphere, in and "
+                                                            "out (a Principled BSDF's glass Base Color; the square "
+                                                            "of a transmittance applied at each crossing).")
 
     def conductor_ior(self, edge_tint: float = 0.5) -> tuple[RGB, RGB]:
         """The complex IOR: as given, else one with this F0 and edge tint (Gulbrandsen 2014)."""

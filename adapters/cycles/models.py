@@ -42,7 +42,7 @@ PRINCIPLED = ModelSpec(
         ParamSpec(name="distribution", kind="choice", default="multi_ggx", choices=("multi_ggx", "ggx"), explore=True,
                   description="Microfacet distribution of the Principled BSDF."),
         ParamSpec(name="base_color", kind="rgb", default=(0.8, 0.8, 0.8), held_when=GLASS,
-                  description="Base Color (a glass's colour: held, the probe cannot see it)."),
+                  description="Base Color (a glass's tint, in and out: held, carried from the source)."),
         _unit("metallic", 0.0, desc="Metallic.", held_when=GLASS),
         _unit("roughness", 0.5, desc="Roughness (α = roughness²)."),
         ParamSpec(name="ior", kind="scalar", lower=1.0, upper=3.0, default=1.5, fit=False, inert_when=METAL,
@@ -81,8 +81,8 @@ PRINCIPLED = ModelSpec(
                   description="Subsurface IOR (the Random Walk (Skin) method's)."),
         _unit("subsurface_anisotropy", 0.0, fit=False, desc="Subsurface Anisotropy (the random walks').",
               inert_when=NO_SSS, active_when={"subsurface_method": ("random_walk", "random_walk_skin")}),
-        _unit("transmission_weight", 0.0, fit=False, desc="Transmission Weight (the probe sees the refracted "
-              "black background: transmission shows as light missing from the reflection)."),
+        _unit("transmission_weight", 0.0, fit=False, desc="Transmission Weight (what is seen through the sphere is "
+              "what surrounds it: an environment, or the black background)."),
         ParamSpec(name="thin_film_thickness", kind="scalar", lower=0.0, upper=100000.0, default=0.0, fit=False,
                   description="Thin Film Thickness (nm)."),
         ParamSpec(name="thin_film_ior", kind="scalar", lower=1.0, upper=3.0, default=1.33, fit=False,

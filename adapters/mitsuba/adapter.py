@@ -308,7 +308,7 @@ def probe_transform(mi, scene: ProbeScene):
 
 class MitsubaAdapter(Adapter):
     name = "mitsuba"
-    version = "3"  # 2: the probe sphere's pole along +y (its tangent frame); 3: environment rows as Mitsuba reads them, paths through glass
+    version = "4"  # 2: the pole along +y; 3: environment rows as Mitsuba reads them, paths through glass; 4: glass tint per crossing
     summary = "Mitsuba 3, in process (llvm_ad_rgb when a working libLLVM is found, else scalar_rgb)"
     install_hint = "pip install 'brdf-remap[mitsuba]'"
     models = MODELS

@@ -60,7 +60,7 @@ def appearance(model: str, p: dict[str, Value], preset: Callable[[str], EtaK]) -
         ior = float(p["int_ior"]) / EXT_IOR  # type: ignore[arg-type]
         return Appearance(kind="dielectric", alpha=_alpha(p)[0], distribution=p.get("distribution"),  # type: ignore
                           specular=_mul((dielectric_f0(ior),) * 3, p["specular_reflectance"]), ior=ior,
-                          transmission=1.0, transmittance=as_rgb(p["specular_transmittance"]))
+                          transmission=1.0, transmittance=as_rgb([t * t for t in p["specular_transmittance"]]))
     if model == "diffuse":
         return Appearance(kind="dielectric", diffuse=tuple(p["reflectance"]))  # type: ignore[arg-type]
     if model in ("ward", "phong"):
@@ -136,7 +136,9 @@ def from_appearance(model: str, a: Appearance) -> dict[str, Value]:
     elif model in ("roughplastic", "plastic", "ashikhmin_shirley_plastic"):
         out.update(diffuse_reflectance=a.diffuse, int_ior=a.dielectric_ior() * EXT_IOR)
     elif model in GLASSES:
-        out.update(int_ior=a.dielectric_ior() * EXT_IOR, specular_transmittance=a.transmittance)
+        # Mitsuba's glasses tint each crossing: in and out, the square of their transmittance.
+        out.update(int_ior=a.dielectric_ior() * EXT_IOR, specular_transmittance=as_rgb([math.sqrt(max(t, 0.0))
+                                                                                        for t in a.transmittance]))
     elif model == "diffuse":
         out["reflectance"] = a.specular if metal else a.diffuse
     elif model in ("ward", "phong"):

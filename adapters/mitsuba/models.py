@@ -123,13 +123,13 @@ PLASTIC = ModelSpec(
 )
 
 SPEC_TRANS = ParamSpec(name="specular_transmittance", kind="rgb", default=(1.0, 1.0, 1.0), fit=False,
-                       description="Multiplier on the transmitted light (physically 1). The probe cannot see it: "
-                                   "direct light through the sphere is shadowed by the sphere itself and the "
-                                   "background is black.")
+                       description="Multiplier on the transmitted light at each crossing (physically 1; a tint: "
+                                   "through the sphere, in and out, its square). Carried from the source, not "
+                                   "fitted.")
 GLASS_IOR = INT_IOR.model_copy(update={"default": 1.5046, "description": "Interior index of refraction (exterior: "
                                                                          "air)."})
-GLASS_NOTE = ("Glass: the probe sees only the reflection (its Fresnel and roughness); the transmitted light "
-              "meets the black background and the sphere's own shadow, so transmittance is not identified.")
+GLASS_NOTE = ("Glass: rendered with paths that pass through the sphere; what is seen through it is what surrounds "
+              "it (an environment, or the black background).")
 
 DIELECTRIC = ModelSpec(
     transmits=True,
@@ -174,7 +174,7 @@ PRINCIPLED = ModelSpec(
     description="Disney principled BSDF (Mitsuba 3's `principled`); lobes are not separable by parameters.",
     parameters=(
         ParamSpec(name="base_color", kind="rgb", default=(0.5, 0.5, 0.5), held_when={"spec_trans": 1.0},
-                  description="Base colour (a glass's colour: held, the probe cannot see it)."),
+                  description="Base colour (a glass's tint: held, carried from the source)."),
         _unit("metallic", 0.0, desc="Metalness.", held_when={"spec_trans": 1.0}),
         _unit("roughness", 0.5, desc="Roughness (α = roughness²)."),
         _unit("specular", 0.5, desc="Dielectric specular amount: F0 = 0.08 × specular (0.5 ≈ IOR 1.5). Mitsuba's "
@@ -187,8 +187,7 @@ PRINCIPLED = ModelSpec(
         _carried("clearcoat", 0.0, "Clear-coat amount (a GTR1 lobe at a fixed IOR 1.5, scaled by 1/4)."),
         _carried("clearcoat_gloss", 0.0, "Clear-coat glossiness (α from 0.1 at 0 to 0.001 at 1).",
                  inert_when={"clearcoat": 0.0}),
-        _unit("spec_trans", 0.0, fit=False, desc="Specular transmission: the probe sees it as reflection lost "
-              "to the black background."),
+        _unit("spec_trans", 0.0, fit=False, desc="Specular transmission (tinted by the base colour, in and out)."),
         _unit("flatness", 0.0, fit=False, desc="Flatness: the diffuse lobe blended towards Hanrahan-Krueger's "
               "subsurface approximation (Disney)."),
     ),

@@ -66,3 +66,21 @@ def test_a_rough_glass_looks_the_same_in_both(adapters):
     beyond, floor = _judged(m, c, _blocks)
     assert beyond < 0.08, (beyond, floor)
     assert (c[0] + c[1]).mean() == pytest.approx((m[0] + m[1]).mean(), rel=0.08)
+
+
+def test_a_tinted_glass_is_tinted_alike(adapters):
+    """A Principled glass's Base Color tints the light through the sphere, in and out; Mitsuba's
+    dielectric tints each crossing (`Appearance.transmittance`): Base Color 0.5 is a transmittance
+    of √0.5. Under a constant environment a clear sphere gives back exactly its radiance."""
+    scene = ProbeScene(lights=[EnvironmentLight(type="environment", map="constant")], resolution=64, spp=128)
+    inner = sphere_hits(scene).interior
+    m, c = adapters["mitsuba"], adapters["cycles"]
+    cycles = c.render("principled", c.models["principled"].complete(
+        {"transmission_weight": 1.0, "base_color": 0.5, "roughness": 0.0, "ior": 1.5}), scene)[inner].mean()
+    dielectric = m.render("dielectric", m.models["dielectric"].complete(
+        {"int_ior": 1.5, "specular_transmittance": 0.5 ** 0.5}), scene)[inner].mean()
+    principled = m.render("principled", m.models["principled"].complete(
+        {"spec_trans": 1.0, "base_color": 0.5, "roughness": 0.01}), scene)[inner].mean()
+    assert cycles == pytest.approx(dielectric, rel=0.01) and cycles == pytest.approx(principled, rel=0.01)
+    clear = m.render("dielectric", m.models["dielectric"].complete({"int_ior": 1.5}), scene)[inner].mean()
+    assert clear == pytest.approx(1.0, rel=0.005)
