@@ -116,7 +116,8 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
     env_ok = all("environment" in adapters[n].light_types for n in (src.adapter, tgt.adapter))
     fit = choose_scene(lambda sc: source(resolved.source_params, scene=sc), job.scene, env_ok,
                        job.settings.resolve_limit, job.settings.fit_scene,
-                       smooth=resolved.source_spec.is_smooth(resolved.source_params) or resolved.target_spec.smooth)
+                       smooth=resolved.source_spec.is_smooth(resolved.source_params) or resolved.target_spec.smooth,
+                       transmissive=resolved.source_spec.transmissive(resolved.source_params))
     renders = ProbeRenders(source, resolved.source_params, resolved.source_spec, target, fit.scene, given=job.scene,
                            given_noise=fit.scene_noise)
     informed = job.settings.start == "informed" and job.lookup is None and job.start is None
@@ -136,7 +137,8 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
     info = describe(adapters, list(dict.fromkeys((src.adapter, tgt.adapter))))
     derived = (adapters[src.adapter].derived(src.model, resolved.source_params),
                adapters[tgt.adapter].derived(tgt.model, result.params))
-    report = build_report(resolved, result, start=start, derived=derived, fit_scene=fit, source_renders=renders.source_renders(),
+    report = build_report(resolved, result, start=start, derived=derived, fit_scene=fit,
+                          source_renders=renders.source_renders(),
                           renders_by_resolution=target.renders_by_resolution(), seconds=time.perf_counter() - t0,
                           adapters=info, files=[FileRecord(name=n, sha256=hashlib.sha256(b).hexdigest(), bytes=len(b))
                                                 for n, b in files.items()],

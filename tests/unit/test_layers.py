@@ -105,8 +105,28 @@ def test_a_smooth_material_is_fitted_under_the_environment():
     assert choose(render, scene, environment_ok=False, limit=0.1, smooth=True).scene.environment is None
 
 
+def test_black_or_transmissive_sources_are_fitted_under_the_environment():
+    """A source black under the point light goes where it shows; one that lets light through too, when
+    the point light reaches it by too few paths to resolve (a rough glass)."""
+    scene = ProbeScene(resolution=16)
+    rng = np.random.default_rng(0)
+
+    def black(sc):
+        return np.full((16, 16, 3), 0.5 if sc.environment is not None else 0.0, np.float32)
+
+    def noisy(sc):
+        spread = 0.01 if sc.environment is not None else 0.8
+        return (0.5 * (1 + spread * rng.standard_normal((16, 16, 3)))).astype(np.float32)
+
+    assert "renders black" in choose(black, scene, environment_ok=True, limit=0.1).why
+    assert choose(black, scene, environment_ok=False, limit=0.1).scene.environment is None  # the engine says so
+    got = choose(noisy, scene, environment_ok=True, limit=0.1, transmissive=True)
+    assert got.scene.environment is not None and "light through the sphere" in got.why
+    assert choose(noisy, scene, environment_ok=True, limit=0.1, policy="as-given", transmissive=True).scene is scene
+
+
 def test_a_full_glass_holds_its_colour_and_metalness(registry):
-    """The probe's black background hides what a glass transmits: its colour is carried, not fitted."""
+    """A glass's colour and metalness are carried from the source, not fitted."""
     glass = Material(adapter="cycles", model="principled",
                      params={"base_color": [1.0, 1.0, 1.0], "metallic": 0.0, "roughness": 0.2,
                              "transmission_weight": 1.0})
