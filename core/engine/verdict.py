@@ -31,8 +31,9 @@ from ..metrics import beyond_noise, clipped_at, eight_bit
 from .assess import Assessment
 from .results import Agreement, StageResult, Validation
 
-GAIN_BEYOND_NOISE = 0.01
-"""A joint step's predicted gain, beyond the noise, that says a result is not at a minimum."""
+GAIN_BEYOND_NOISE = 0.5
+"""A joint step's predicted gain beyond the noise, as a fraction of the threshold, that says a result
+is not at a minimum (less could not change how the result is judged)."""
 LOOKUP_SLACK = 1.2
 """A table's lookup within this factor of what the table's direct fits reach there is the model's mismatch."""
 SCENE_ADVICE = ("render more samples (--spp), or fit under an environment (a scene whose lights include "
@@ -112,8 +113,8 @@ def _fit_problems(ev: Evidence) -> list:
         out.append(IllConditioned(condition=a.condition))
     # Judged beyond the noise, as errors are: a step "predicting" less than the render noise is fitting
     # the noise (a mirror at a 2.0 % floor, 2.2 % "could be 0.6 %": 0.9 % beyond it, nothing to gain).
-    if a.predicted is not None and ev.trust_prediction and \
-            ev.beyond_noise - beyond_noise(max(a.predicted, ev.noise_floor), ev.noise_floor) > GAIN_BEYOND_NOISE:
+    if a.predicted is not None and ev.trust_prediction and ev.beyond_noise - beyond_noise(
+            max(a.predicted, ev.noise_floor), ev.noise_floor) > GAIN_BEYOND_NOISE * ev.threshold:
         out.append(NotAtMinimum(predicted=a.predicted))
     out += [PinnedOnBound(parameter=p.parameter, side=p.side, error_without=p.error_without) for p in a.pins]
     return out

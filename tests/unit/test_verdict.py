@@ -169,6 +169,7 @@ def test_a_lookup_about_as_close_as_the_tables_fits_is_a_mismatch_not_a_failure(
 
 def test_a_joint_step_is_judged_beyond_the_noise():
     assert _judge(0.0224, 0.0204, predicted=0.006).status == "ok"  # a mirror: 0.9 % beyond a 2.0 % floor
+    assert _judge(0.0257, 0.0224, predicted=0.008).status == "ok"  # 1.3 % beyond: half the threshold at most
     v = _judge(0.04, 0.005, predicted=0.01)
     assert v.status == "unreliable" and "not at a minimum" in v.reason
     v = _judge(0.20, 0.08, predicted=0.13)  # noisy, and 18.3 % -> 10.2 % beyond it: a real gain
