@@ -31,6 +31,7 @@ NAME = "spectral gold"
 MITSUBA_READS = """
 import json, sys, mitsuba as mi
 mi.set_variant("scalar_rgb")
+mi.set_log_level(mi.LogLevel.Error)  # Mitsuba logs to stdout, where the answer goes
 p = mi.traverse(mi.load_file(sys.argv[1]))
 print(json.dumps({k: [float(x) for x in p[f"{sys.argv[2]}.{k}.value"]] for k in ("eta", "k")}))
 """
@@ -47,7 +48,7 @@ def grey_reading() -> dict:
     for name in ("eta", "k"):
         block = re.search(rf'id="{NAME}".*?name="{name}" value="([^"]+)"', text, re.S).group(1)
         vals = [float(p.split(":")[1]) for p in re.split(r"[,\s]+", block) if ":" in p]
-        out[name] = [sum(vals) / len(vals)] * 3
+        out[name] = (sum(vals) / len(vals),) * 3
     return out
 
 
