@@ -87,6 +87,20 @@ def _stop(pool: cf.ProcessPoolExecutor) -> None:
             pass
     for p in procs:
         p.join(timeout=5)
+        if p.is_alive():  # in a renderer's native code, where its signal handler cannot run yet
+            p.kill()
+            p.join(timeout=5)
+    # The pool's manager thread is joined, without a timeout, when the interpreter exits: wake it
+    # now (its workers are gone) and give it the time it needs to see so, rather than hang there.
+    wake = getattr(pool, "_executor_manager_thread_wakeup", None)
+    manager = getattr(pool, "_executor_manager_thread", None)
+    try:
+        if wake is not None:
+            wake.wakeup()
+    except (OSError, ValueError):
+        pass
+    if manager is not None:
+        manager.join(timeout=10)
 
 
 @contextmanager

@@ -158,10 +158,22 @@ def test_killed_and_rerun_every_material_once_and_dask_gives_the_same(tmp_path, 
 def test_bad_input_is_exit_2_and_one_line(tmp_path, args, words):
     proc = remap("convert", ROOT / "examples" / "library" / "scene.xml", "--out", tmp_path / "o", *args)
     one_line_error(proc, words)
-    (tmp_path / "broken.xml").write_text("<scene version='3.0.0'><bsdf></scene>")
-    one_line_error(remap("convert", tmp_path / "broken.xml", "--to", "mitsuba", "--out", tmp_path / "o"),
-                   "broken.xml: line 1", "malformed XML")
     assert not (tmp_path / "o").exists()
+
+
+def test_a_file_that_cannot_be_read_is_a_failure_and_the_others_convert(tmp_path):
+    """A malformed file among good ones: listed as failed with its file, line and reason (exit 1),
+    the others converted, as for a failed material."""
+    (tmp_path / "broken.xml").write_text("<scene version='3.0.0'><bsdf></scene>")
+    (tmp_path / "good.xml").write_text("<scene version='3.0.0'><bsdf type='diffuse' id='grey'/></scene>")
+    proc = remap("convert", tmp_path / "broken.xml", tmp_path / "good.xml", "--to", "mitsuba", "--out",
+                 tmp_path / "o", *FORMATS_ONLY)
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr, proc.stderr
+    rows = {m["name"]: m for m in _summary(tmp_path / "o")["materials"]}
+    assert rows["broken"]["status"] == "failed" and "broken.xml: line 1" in rows["broken"]["reason"] and \
+        "malformed XML" in rows["broken"]["reason"] and "\n" not in rows["broken"]["reason"]
+    assert rows["grey"]["status"] == "ok"
+    assert "failed: broken" in proc.stdout
 
 
 def test_one_material_in_two_files_is_fitted_once_and_kept_under_each_name(tmp_path, mitsuba_adapter):
