@@ -71,7 +71,7 @@ def agreement(source: Adapter, target: Adapter, transmissive: bool,
               judged: Callable[[str], bool] = lambda c: True) -> Agreement:
     """Whether the two adapters agree under these conditions (name, label, two scenes of other seeds)
     on a material of this kind; ``judged(name)``: whether the verdict judges that condition."""
-    if not transmissive or source is target:
+    if not transmissive or getattr(source, "unmetered", source) is getattr(target, "unmetered", target):
         return Agreement()
     lacking = [a.name for a in (source, target) if not {"smooth", "rough"} <= set(a.glasses)]
     if lacking:

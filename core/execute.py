@@ -19,6 +19,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
+from .account import Ledger, Metered, purpose
 from .atomic import why
 from .engine import ProgressFn, remap
 from .errors import RemapError, RenderError
@@ -109,15 +110,19 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
     t0 = time.perf_counter()
     job = resolved.job
     src, tgt = job.source, job.target
-    source = CachedRenderer(adapters[src.adapter], src.adapter, src.model, job.scene)
-    target = CachedRenderer(adapters[tgt.adapter], tgt.adapter, tgt.model, job.scene)
+    ledger = Ledger()
+    src_adapter, tgt_adapter = Metered(adapters[src.adapter], "source", ledger), Metered(adapters[tgt.adapter],
+                                                                                          "target", ledger)
+    source = CachedRenderer(src_adapter, src.adapter, src.model, job.scene)
+    target = CachedRenderer(tgt_adapter, tgt.adapter, tgt.model, job.scene)
     if progress:
         progress("source", 0, float("nan"))
     env_ok = all("environment" in adapters[n].light_types for n in (src.adapter, tgt.adapter))
-    fit = choose_scene(lambda sc: source(resolved.source_params, scene=sc), job.scene, env_ok,
-                       job.settings.resolve_limit, job.settings.fit_scene,
-                       smooth=resolved.source_spec.is_smooth(resolved.source_params) or resolved.target_spec.smooth,
-                       transmissive=resolved.source_spec.transmissive(resolved.source_params))
+    with purpose("fit scene"):
+        fit = choose_scene(lambda sc: source(resolved.source_params, scene=sc), job.scene, env_ok,
+                           job.settings.resolve_limit, job.settings.fit_scene,
+                           smooth=resolved.source_spec.is_smooth(resolved.source_params) or resolved.target_spec.smooth,
+                           transmissive=resolved.source_spec.transmissive(resolved.source_params))
     renders = ProbeRenders(source, resolved.source_params, resolved.source_spec, target, fit.scene, given=job.scene,
                            given_noise=fit.scene_noise)
     informed = job.settings.start == "informed" and job.lookup is None and job.start is None
@@ -125,8 +130,8 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
     start = {**(informed_start(resolved, adapters) if informed else given_start(resolved)), **smooth}
     free = [p for p in fitted(resolved, start) if p not in smooth] if job.lookup is None else []
     # A textured source is a lookup (nothing fitted): its maps and their check come first, for the verdict.
-    texturing = texture_result(resolved, adapters[src.adapter], adapters[tgt.adapter], dict(resolved.base)) \
-        if src.textures else None
+    with purpose("textured"):
+        texturing = texture_result(resolved, src_adapter, tgt_adapter, dict(resolved.base)) if src.textures else None
     notes = lookup_notes(job) + (textured_findings(texturing.record, job.settings.threshold,
                                                    job.settings.resolve_limit) if texturing else []) + \
         ([SmoothHeld(held=smooth)] if smooth else [])
@@ -140,6 +145,7 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
     report = build_report(resolved, result, start=start, derived=derived, fit_scene=fit,
                           source_renders=renders.source_renders(),
                           renders_by_resolution=target.renders_by_resolution(), seconds=time.perf_counter() - t0,
+                          account=ledger.account(time.perf_counter() - t0),
                           adapters=info, files=[FileRecord(name=n, sha256=hashlib.sha256(b).hexdigest(), bytes=len(b))
                                                 for n, b in files.items()],
                           textures=texturing.record if texturing else None)

@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from .account import purpose
 from .cache import RenderCache, render_key
 from .engine.levels import Level
 from .agreement import agreement
@@ -119,7 +120,8 @@ class ProbeRenders:
     def level(self, scene: ProbeScene, lobes: bool = True) -> Level:
         key = (scene.cache_key(), lobes)
         if key not in self._levels:
-            full, found = self._source_images(scene, lobes)
+            with purpose("source"):
+                full, found = self._source_images(scene, lobes)
             self._levels[key] = Level(_AtScene(self.target, scene), full, found, scene.spp)
         return self._levels[key]
 
@@ -142,8 +144,9 @@ class ProbeRenders:
 
     def source_noise(self) -> float:
         if self._noise is None:
-            second = self.source(self.source_params, scene=self.scene.with_(seed=self.scene.seed + 1))
-            self._noise = relative_rmse(self.source_image(), second)
+            with purpose("source"):
+                second = self.source(self.source_params, scene=self.scene.with_(seed=self.scene.seed + 1))
+                self._noise = relative_rmse(self.source_image(), second)
         return self._noise
 
     def target_noise(self, params: dict[str, Value]) -> float:

@@ -13,6 +13,7 @@ from typing import Any
 
 from pydantic import Field, ValidationError, computed_field
 
+from .account import Account
 from .configio import validation_message
 from .engine.results import Check, EngineResult, StageResult
 from .engine.tuning import ENGINE_VERSION
@@ -131,6 +132,8 @@ class Report(WithDerived):
     files: list[FileRecord] = Field(description="The files of this result beside result.json, with their hashes.")
     textures: Textured | None = Field(None, description="A textured source remapped texel by texel through a "
                                                         "table: its maps and the textured check.")
+    account: Account | None = Field(None, description="Where the job's seconds went: renders by purpose and "
+                                                      "side, and the time outside renderers.")
 
     @computed_field  # type: ignore[prop-decorator]
     @property
@@ -154,7 +157,7 @@ class Report(WithDerived):
         """SHA-256 of the rest of the document: a report edited after it was written is not
         taken for the job's result. Fields of format 4 are left out while absent (see `READS_FROM`)."""
         doc = self.model_dump(mode="json", exclude={"digest"})
-        for container, key in ((doc, "textures"), (doc["job"], "lookup"), (doc["job"], "start"),
+        for container, key in ((doc, "textures"), (doc, "account"), (doc["job"], "lookup"), (doc["job"], "start"),
                                (doc["job"]["source"], "textures")):
             if not container.get(key):
                 container.pop(key, None)
@@ -170,7 +173,7 @@ class Report(WithDerived):
 def build_report(resolved: Resolved, result: EngineResult, *, start: dict, derived: tuple[dict, dict], fit_scene,
                  source_renders: int, renders_by_resolution: dict[str, int], seconds: float,
                  adapters: dict[str, dict[str, Any]], files: list[FileRecord],
-                 textures: Textured | None = None) -> Report:
+                 textures: Textured | None = None, account: Account | None = None) -> Report:
     """The report, in one place: ``derived`` holds the source's and the target's derived quantities."""
     from . import __version__
 
@@ -198,7 +201,8 @@ def build_report(resolved: Resolved, result: EngineResult, *, start: dict, deriv
         fit_scene=None if not fit_scene.why else FitSceneRecord(why=fit_scene.why, scene=fit_scene.scene,
                                                                  source_noise_given=fit_scene.scene_noise,
                                                                  source_noise=fit_scene.noise), adapters=adapters,
-        host={"python": platform.python_version(), "machine": platform.machine()}, files=files, textures=textures)
+        host={"python": platform.python_version(), "machine": platform.machine()}, files=files, textures=textures,
+        account=account)
 
 
 def for_job(report: Report, job: Job) -> Report:

@@ -47,10 +47,12 @@ def _worker_count() -> int:
             raise ConfigError(f"must be from 1 to {most} (this machine's cores), got {n}",
                               field="BRDFREMAP_CYCLES_WORKERS")
         return n
-    # Two where there are two cores: measured on 2 cores (bench/workers.py), a warm remap to
-    # Principled is 1.03x as fast (1.11x before Jacobians were updated between rendered ones)
-    # and a cold one no slower (the second Blender starts during the first renders).
-    return 2 if (os.cpu_count() or 1) >= 2 else 1
+    # One: each Blender renders on every core already, and two of them on 2 cores compete
+    # (bench/workers.py: a warm remap to Principled 0.55x as fast with two; a 32² render 70 ms
+    # in a batch over two workers against 10 ms alone). Once 1.03x as fast, before the fits
+    # rendered their Jacobians' tries and polishes at small sizes, where Blender's start-up and
+    # the two processes' contention outweigh the overlap.
+    return 1
 
 
 def read_passes(path: str, expected: tuple[str, ...] = PASSES) -> dict[str, np.ndarray]:
@@ -212,8 +214,8 @@ class CyclesAdapter(Adapter):
     def render_batch(self, requests):
         """The uncached renders split over the worker processes, one thread feeding each.
 
-        Blender spends much of a small render in single-threaded scene sync, so a second
-        worker overlaps that; ``BRDFREMAP_CYCLES_WORKERS`` sets the count (default 2 with 2+ cores)."""
+        ``BRDFREMAP_CYCLES_WORKERS`` sets the count (default 1: see `_worker_count`); with one,
+        the renders are made one after another."""
         todo: dict[str, dict[str, Any]] = {}
         lobes: set[str] = set()
         for model, params, scene, lobe in requests:

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..account import purpose
 from ..errors import OptimisationError
 from ..findings import ChoiceTried, JointRefined, NoisePolished, PredictionNotRealised, StartKept
 from ..metrics import delta_e_itp, relative_rmse
@@ -103,17 +104,23 @@ def remap(target: ModelSpec, base: dict[str, Value], free: list[str], renders: R
     discrete choices to try first (each fitted briefly, the best kept). ``notes``: findings the
     caller adds to the verdict (where the parameters came from)."""
     t0 = time.perf_counter()
-    run = _setup(target, free, renders, settings, tuning, progress)
+    with purpose("source"):
+        run = _setup(target, free, renders, settings, tuning, progress)
     run.notes += list(notes)
-    base = _choose(run, dict(base), list(alternatives))
+    with purpose("tries"):
+        base = _choose(run, dict(base), list(alternatives))
     plan = plan_stages(settings.scheme, target, free, run.scene.source_lobes)
     if free:  # with nothing to fit, no scheme runs
         run.notes += plan.findings
-    start = _State(dict(base), *run.render_final(dict(base), "start"))
-    state = _never_worse(run, start, _fit_stages(run, plan, dict(base)))
-    assessment = run.assess(state)
-    state, assessment, joint = _refine_jointly(run, plan, state, assessment)
-    state, assessment = _polish_noise_limited(run, state, assessment, start.err)
+    with purpose("fit"):
+        start = _State(dict(base), *run.render_final(dict(base), "start"))
+        state = _never_worse(run, start, _fit_stages(run, plan, dict(base)))
+    with purpose("checks"):
+        assessment = run.assess(state)
+    with purpose("joint"):
+        state, assessment, joint = _refine_jointly(run, plan, state, assessment)
+    with purpose("precise"):
+        state, assessment = _polish_noise_limited(run, state, assessment, start.err)
     return _conclude(run, plan, state, assessment, joint, t0, start.err)
 
 
@@ -328,12 +335,15 @@ def _conclude(run: _Run, plan: Plan, state: _State, assessment: Assessment, join
         run.notes.append(PredictionNotRealised(predicted_now=assessment.predicted, rounds=joint.rounds,
                                                before=joint.before, after=joint.after,
                                                predicted_first=joint.predicted))
-    target_noise = run.renders.target_noise(state.params)
-    validation = run.renders.validation(state.params) if run.settings.validation == "held-out" else Validation()
+    with purpose("noise"):
+        target_noise = run.renders.target_noise(state.params)
+    with purpose("validation"):
+        validation = run.renders.validation(state.params) if run.settings.validation == "held-out" else Validation()
     floor = float(np.hypot(run.source_noise, target_noise) / np.sqrt(2))
     limit = run.settings.resolve_limit
     judged = {"scene": floor <= limit, **{c.condition: c.noise_floor <= limit for c in validation.checks}}
-    agreement = run.renders.agreement(state.params, validation, run.threshold, lambda c: judged.get(c, False))
+    with purpose("agreement"):
+        agreement = run.renders.agreement(state.params, validation, run.threshold, lambda c: judged.get(c, False))
     evidence = Evidence(error=state.err, noise_floor=floor, threshold=run.threshold,
                         resolve_limit=run.settings.resolve_limit, assessment=assessment, stages=run.stages,
                         cond_limit=run.tuning.cond_limit, renderer_notes=run.renders.notes(state.params),
