@@ -270,12 +270,15 @@ def _named(adapter, model: str, look, base: dict[str, Value], p, value: Value) -
 
 def alternatives(resolved: Resolved, start: dict[str, Value]) -> list[dict[str, Value]]:
     """The discrete choices to try: every value of each explorable choice (`ParamSpec.explore`)
-    that neither the user held, nor the source carried (same model), nor the start named.
+    that neither the user held, nor the source carried (same model), nor the start named, nor the
+    start makes inert (a distribution at roughness 0, held there for a smooth source).
     [] when there is nothing to try."""
     same = (resolved.job.source.adapter, resolved.job.source.model) == (resolved.job.target.adapter,
                                                                         resolved.job.target.model)
+    chosen = {**resolved.base, **start}
     open_ = [p for p in resolved.target_spec.parameters if p.kind == "choice" and p.explore and not same
-             and p.name not in resolved.fixed and p.name not in start]
+             and p.name not in resolved.fixed and p.name not in start
+             and not resolved.target_spec.is_inert(p.name, chosen)]
     combos: list[dict[str, Value]] = [{}]
     for p in open_:
         combos = [{**c, p.name: v} for c in combos for v in p.choices]

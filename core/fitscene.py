@@ -6,7 +6,8 @@ from a mismatch. The source's own render noise says so before any fit. Then, in 
 
 1. more samples, while the noise they predict (noise ∝ 1/√spp) reaches `GOAL` within
    `MAX_SPP_FACTOR` times the scene's samples;
-2. else the studio environment (`core.environment`) instead of the scene's lights, where both
+2. else the studio environment (`core.environment`) instead of the scene's lights, at half the
+   resolution (`ENV_MIN_RESOLUTION`), where both
    adapters render one: a near-mirror reflects its whole surroundings, which a point light
    reduces to one sub-pixel spot (bench/validation.py measures both);
 3. else the scene as it is (the verdict then says it cannot resolve the material).
@@ -27,6 +28,12 @@ from .scene import MAX_SPP, EnvironmentLight, ProbeScene
 GOAL = 0.03
 """The source noise (relative RMSE between two seeds) a fit scene should reach."""
 MAX_SPP_FACTOR = 16
+ENV_MIN_RESOLUTION = 32
+"""The studio fit scene is half the job's resolution, at least this: its noise per pixel, which the
+samples set, is the same, at a quarter of the cost, and a sphere lit from every side shows its
+studio at that size (as the held-out studio is rendered: `core.validation`). The samples it takes
+to resolve a smooth or transmissive source (up to 16 times the scene's) made these fits the
+costliest of a library: a rough glass 280-380 s with `--jobs 2`."""
 
 
 @dataclass(frozen=True)
@@ -95,9 +102,11 @@ def choose(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, enviro
 
 
 def _environment(render, scene: ProbeScene, noise: float, limit: float, why: str) -> FitScene | None: 
-    """The scene under the studio environment, with the samples that bring the source's noise to
-    GOAL (up to MAX_SPP_FACTOR times more), or None when it cannot resolve the source either."""
+    """The scene under the studio environment at half its resolution (`ENV_MIN_RESOLUTION`), with
+    the samples that bring the source's noise to GOAL (up to MAX_SPP_FACTOR times more), or None
+    when it cannot resolve the source either."""
     env = scene.model_copy(update={"lights": [EnvironmentLight(type="environment", map="studio")],
+                                   "resolution": max(ENV_MIN_RESOLUTION, scene.resolution // 2),
                                    "name": f"{scene.name} under the studio environment"})
     n = source_noise(render, env)
     if math.isinf(n):  # black there too: nothing to fit anywhere

@@ -20,7 +20,8 @@ from .metrics import relative_rmse
 from .protocol import Adapter, check_image
 from .scene import ProbeScene
 from .schemas import ModelSpec, Value
-from .validation import held_out_scenes, validate
+from .engine.schedule import highlight_pixels
+from .validation import held_out_scenes, point_resolution, validate
 
 
 def _round(v: Value) -> Value:
@@ -167,7 +168,16 @@ class ProbeRenders:
         # finer for a sharp source: their samples follow what the user asked for.
         return validate(lambda sc: self.source(self.source_params, scene=sc), lambda sc: self.target(params, scene=sc),
                         self.job_scene, problems, given=self.other_lights,
-                        given_noise=self.given_noise, fit_lights=self.scene.view_scenes()[0].lights)
+                        given_noise=self.given_noise, fit_lights=self.scene.view_scenes()[0].lights,
+                        resolution=self.point_resolution())
+
+    def point_resolution(self) -> int:
+        """The frontal point-light conditions' resolution, from the source's highlight on the job's
+        scene (`core.validation.point_resolution`); the scene's when the fit ran elsewhere."""
+        if self.other_lights or self.job_scene.views:
+            return self.job_scene.resolution
+        px = highlight_pixels(self.source_image()) * (self.job_scene.resolution / self.scene.resolution) ** 2
+        return point_resolution(self.job_scene, px)
 
     def agreement(self, params: dict[str, Value], validation: Validation, threshold: float, judged) -> Agreement:
         transmissive = self.source_spec.transmissive(self.source_params) or \
@@ -175,7 +185,8 @@ class ProbeRenders:
         fit = (self.scene.with_(seed=self.scene.seed + 2), self.scene.with_(seed=self.scene.seed + 3))
         conditions = [("scene", "fit scene", fit)] + [
             (c.name, c.label, (a, b)) for c, a, b in held_out_scenes(self.job_scene, self.other_lights,
-                                                                       self.scene.view_scenes()[0].lights)
+                                                                       self.scene.view_scenes()[0].lights,
+                                                                       self.point_resolution())
             if c.name in {k.condition for k in validation.checks}]
         return agreement(self.source.adapter, self.target.adapter, transmissive, conditions, threshold, judged)
 

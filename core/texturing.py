@@ -24,7 +24,8 @@ from .textures import Texture, TextureMap, encode, kind_of_file
 CHECK_RESOLUTION, CHECK_SPP = 64, 32
 """The textured check's least resolution and samples (each side twice, for its noise): the scene's
 resolution and four times its samples (128 px and 64 spp for the default probe), at least these;
-under the studio environment four times the samples (every direction lights each pixel)."""
+under the studio environment half the resolution (at least this) and four times the samples
+(every direction lights each pixel), as the held-out environment is rendered."""
 
 
 class MapRecord(Strict):
@@ -159,7 +160,9 @@ def _check(resolved, source: Adapter, target: Adapter, inputs, maps: dict[str, n
     first = job.scene.view_scenes()[0]
     spp = max(CHECK_SPP, job.scene.spp * 4)
     base = first.with_(resolution=max(CHECK_RESOLUTION, first.resolution), spp=spp)
+    # As a held-out environment: half the resolution at four times the samples (the scene check's cost).
     studio = base.model_copy(update={"lights": [EnvironmentLight(type="environment", map="studio")],
+                                     "resolution": max(CHECK_RESOLUTION, base.resolution // 2),
                                      "spp": 4 * spp, "name": "textured check: studio"})
     src_maps = {n: TextureMap(inputs.source_maps[n], t.filter) for n, t in job.source.textures.items()}
     tgt_maps = {n: TextureMap(v, filt) for n, v in maps.items()}

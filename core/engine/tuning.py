@@ -7,7 +7,7 @@ from pydantic import Field
 
 from ..model import Strict
 
-ENGINE_VERSION = 9
+ENGINE_VERSION = 10
 """Bump whenever a change in core/ would change a result: the engine, but also the informed start
 (execute.py, appearance.py), the renders' cache and rounding (renders.py) or the metrics. A stored
 result is reused (a resumed sweep, a library rerun) only when its job key, which includes this
@@ -39,6 +39,9 @@ class Tuning(Strict):
                                                  "pinned on a bound its gradient pushes against, or inert there.")
     precise_below: float = Field(3.0, gt=0, description="A fit ending within this many times the source's render "
                                                         "noise gets the polish at `Settings.precise_spp` samples.")
+    precise_max_spp: int = Field(256, ge=1, description="The polish at more samples is left out where it would "
+                                                         "render more samples than this: a fit scene at that many "
+                                                         "was chosen to reach its noise goal (`core.fitscene`).")
     choice_budget: int = Field(30, ge=1, le=100_000, description="Renders of the brief fit each value of an open "
                                                                  "discrete choice gets (the best is kept).")
     max_renders_per_stage: int = Field(80, ge=1, le=100_000, description="Render budget of one fresh stage.")
