@@ -12,7 +12,6 @@ from dataclasses import dataclass
 from typing import Any, Callable, Iterator
 
 from .errors import ConfigError
-from .threads import RENDER_THREADS_ENV, share
 
 MAX_JOBS = 256
 
@@ -63,7 +62,7 @@ def workers(jobs: int = 1, scheduler: str | None = None) -> Iterator[Workers]:
         # spawn: a fresh interpreter per worker; forking a process that holds a renderer's
         # threads and native state is not safe.
         pool = cf.ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"),
-                                      initializer=_start_worker, initargs=(os.getpid(), share(jobs)))
+                                      initializer=_watch_parent, initargs=(os.getpid(),))
         try:
             yield Workers(pool, jobs, f"up to {jobs} local processes")
         except BaseException:
@@ -125,13 +124,6 @@ def _dask(address: str) -> Iterator[Workers]:
         yield Workers(client.get_executor(pure=False), max(procs, 1), f"dask at {address} ({procs} workers)")
     finally:
         client.close()
-
-
-def _start_worker(parent: int, threads: int) -> None:
-    """A local pool worker: its share of the cores for its renderers (`core.threads`), and gone
-    with its parent."""
-    os.environ[RENDER_THREADS_ENV] = str(threads)
-    _watch_parent(parent)
 
 
 def _watch_parent(parent: int) -> None:

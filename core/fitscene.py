@@ -6,8 +6,8 @@ from a mismatch. The source's own render noise says so before any fit. Then, in 
 
 1. more samples, while the noise they predict (noise ∝ 1/√spp) reaches `GOAL` within
    `MAX_SPP_FACTOR` times the scene's samples;
-2. else the studio environment (`core.environment`) instead of the scene's lights, at half the
-   resolution (`ENV_MIN_RESOLUTION`), where both
+2. else the studio environment (`core.environment`) instead of the scene's lights (at half the
+   resolution for a smooth source: `ENV_MIN_RESOLUTION`), where both
    adapters render one: a near-mirror reflects its whole surroundings, which a point light
    reduces to one sub-pixel spot (bench/validation.py measures both);
 3. else the scene as it is (the verdict then says it cannot resolve the material).
@@ -29,11 +29,13 @@ GOAL = 0.03
 """The source noise (relative RMSE between two seeds) a fit scene should reach."""
 MAX_SPP_FACTOR = 16
 ENV_MIN_RESOLUTION = 32
-"""The studio fit scene is half the job's resolution, at least this: its noise per pixel, which the
-samples set, is the same, at a quarter of the cost, and a sphere lit from every side shows its
-studio at that size (as the held-out studio is rendered: `core.validation`). The samples it takes
-to resolve a smooth or transmissive source (up to 16 times the scene's) made these fits the
-costliest of a library: a rough glass 280-380 s with `--jobs 2`."""
+"""A perfectly smooth (or near-mirror, opaque) source's studio fit scene is half the job's resolution, at least this: a
+quarter of the cost. The samples it takes to resolve it (up to 16 times the scene's) made these
+fits among the costliest of a library (a smooth plastic 150 s with `--jobs 2`, 25 s at half the
+size), and judged under the held-out lights the fits at either size are the same (within 0.1-1.3
+points beyond the noise on the public corpus: docs/speed.md). A rough glass's is not halved: its
+light through the sphere is noisy at any samples (16-20 % at 256 spp), and a quarter of the pixels
+left its fit twice as far off under the turned studio (9.4 % -> 25.9 % beyond the noise)."""
 
 
 @dataclass(frozen=True)
@@ -79,7 +81,7 @@ def choose(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, enviro
             "the source renders black under the scene's lights" if noise == math.inf else \
             f"light through the sphere, which a point light reaches by rare paths ({noise:.0%} noise at " \
             f"{scene.spp} spp)"
-        found = _environment(render, scene, noise, math.inf, why)
+        found = _environment(render, scene, noise, math.inf, why, half=smooth)
         if found is not None:
             return found
     if math.isinf(noise):  # black, and nowhere else to look: the engine says so
@@ -95,18 +97,21 @@ def choose(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, enviro
                                   f"({n:.1%})", n, noise)
     if policy == "auto" and environment_ok and scene.environment is None:
         found = _environment(render, scene, noise, limit, f"the source's render noise at {scene.spp} spp is "
-                                                          f"{noise:.0%} (a highlight smaller than a pixel)")
+                                                          f"{noise:.0%} (a highlight smaller than a pixel)",
+                             half=not transmissive)
         if found is not None:
             return found
     return FitScene(scene, noise=noise, scene_noise=noise)
 
 
-def _environment(render, scene: ProbeScene, noise: float, limit: float, why: str) -> FitScene | None: 
-    """The scene under the studio environment at half its resolution (`ENV_MIN_RESOLUTION`), with
-    the samples that bring the source's noise to GOAL (up to MAX_SPP_FACTOR times more), or None
-    when it cannot resolve the source either."""
+def _environment(render, scene: ProbeScene, noise: float, limit: float, why: str,
+                 half: bool = False) -> FitScene | None:
+    """The scene under the studio environment (``half``: at half its resolution, at least
+    `ENV_MIN_RESOLUTION`), with the samples that bring the source's noise to GOAL (up to
+    MAX_SPP_FACTOR times more), or None when it cannot resolve the source either."""
+    res = max(ENV_MIN_RESOLUTION, scene.resolution // 2) if half else scene.resolution
     env = scene.model_copy(update={"lights": [EnvironmentLight(type="environment", map="studio")],
-                                   "resolution": max(ENV_MIN_RESOLUTION, scene.resolution // 2),
+                                   "resolution": min(res, scene.resolution),
                                    "name": f"{scene.name} under the studio environment"})
     n = source_noise(render, env)
     if math.isinf(n):  # black there too: nothing to fit anywhere

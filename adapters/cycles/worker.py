@@ -138,12 +138,6 @@ class BlenderState:
         r.film_transparent = False
         cy = scene.cycles
         cy.device = "CPU"
-        from brdfremap.core.threads import render_threads
-
-        threads = render_threads()
-        if threads:  # this process's share of the cores (`--jobs N`: N Blenders on them)
-            r.threads_mode = "FIXED"
-            r.threads = threads
         cy.use_animated_seed = False
         cy.use_denoising = False
         cy.use_adaptive_sampling = False

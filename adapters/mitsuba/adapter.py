@@ -19,7 +19,6 @@ from brdfremap.core.appearance import (
     reflectivity_edge_tint,
 )
 from brdfremap.core.atomic import write_text_atomic
-from brdfremap.core.threads import render_threads
 from brdfremap.core.errors import ConfigError, RenderError
 from brdfremap.core.protocol import Adapter, ModelChoice
 from brdfremap.core.scene import PointLight, ProbeScene
@@ -337,11 +336,6 @@ class MitsubaAdapter(Adapter):
         except Exception as exc:
             raise RenderError(f"mitsuba cannot use variant {self.choice.variant!r}: {exc}") from exc
         self.mi = mi
-        threads = render_threads()
-        if threads:  # this process's share of the cores (`--jobs N`: N Mitsubas on them)
-            import drjit as dr
-
-            dr.set_thread_count(threads)
         # Mitsuba logs to stdout, where a user's report goes (`remap ... | tee`): its warnings
         # ("sample count rounded up" at a high spp, hundreds in a sweep) are not ours to print there.
         mi.logger().set_log_level(mi.LogLevel.Error)
