@@ -8,7 +8,7 @@ import pytest
 
 from brdfremap.core.errors import RenderError
 from brdfremap.core.metrics import relative_rmse
-from brdfremap.core.scene import ProbeScene
+from brdfremap.core.scene import EnvironmentLight, ProbeScene
 from brdfremap.core.testing import analytic_lambert, sphere_hits
 
 SCENE = ProbeScene(resolution=64)
@@ -66,7 +66,14 @@ def test_what_principled_declares_inert_leaves_the_image_unchanged(cycles_adapte
             "subsurface_scale": 1.0, "subsurface_ior": 2.0, "subsurface_anisotropy": 0.5, "thin_film_ior": 2.0,
             "anisotropic_rotation": 0.3, "subsurface_method": "burley"}
     inert = {q.name for q in spec.parameters if q.inert_when}
-    assert inert == set(away)  # every declaration is checked here: coat, sheen, subsurface weights, film, anisotropy 0
+    # every declaration is checked here: coat, sheen, subsurface weights, film, anisotropy 0; below, roughness 0
+    assert inert == set(away) | {"distribution"}
+    # At roughness 0 every distribution is the same mirror: no tries of one for a smooth source.
+    studio = ProbeScene(resolution=32, spp=8, lights=[EnvironmentLight(type="environment", map="studio")])
+    mirror = {**p, "roughness": 0.0}
+    assert spec.is_inert("distribution", mirror) and not spec.is_inert("distribution", p)
+    assert np.array_equal(cycles_adapter.render("principled", {**mirror, "distribution": "ggx"}, studio),
+                          cycles_adapter.render("principled", {**mirror, "distribution": "multi_ggx"}, studio))
     for name, value in away.items():
         assert spec.is_inert(name, p), name
         assert np.array_equal(cycles_adapter.render("principled", {**p, name: value}, SCENE), ref), name

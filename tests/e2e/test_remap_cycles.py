@@ -26,12 +26,10 @@ def test_same_family_mitsuba_conductor_to_cycles_glossy(tmp_path, root, mitsuba_
     assert r["verdict"] == "unreliable" and [f["kind"] for f in r["findings"] if f["severity"] == "unreliable"] == [
         "held_out_above"]
     assert [c["condition"] for f in r["findings"] if f["kind"] == "held_out_above" for c in f["conditions"]] == ["rim"]
-    # Ended at the render noise: one render at 4x the samples shows it is noise there too, so the
-    # polish there is not run (it found 0.15 % -> 0.15 % for such fits); its render is counted apart.
+    # Ended at the render noise, so polished at 4x the samples; its renders are counted apart.
     byres = r["renders_by_resolution"]
-    assert sum(byres.values()) == r["renders"] and byres.get("128px@64spp", 0) == 1, byres
-    assert not any(n.startswith("noise-limited") for n in r["notes"]), r["notes"]
-    assert not any(st["name"].startswith("precise") for st in r["stages"])
+    assert sum(byres.values()) == r["renders"] and byres.get("128px@64spp", 0) > 0, byres
+    assert any(n.startswith("noise-limited") for n in r["notes"]), r["notes"]
 
 
 def test_main_job_gold_to_principled(tmp_path, root, mitsuba_adapter, cycles_adapter):
