@@ -97,12 +97,18 @@ def _pixel_samples(scene: Any) -> int:
 
 class Metered:
     """An adapter whose renders are timed into ``ledger`` as ``side``'s; everything else is the
-    adapter's own. Two Metered of one adapter (a job within one renderer) share the renderer."""
+    adapter's own. Two Metered of one adapter (a job within one renderer) share the renderer.
+    Each call counts as a render: one the adapter serves from its own cache (Cycles' lobe passes,
+    kept from a render of the same parameters) counts too, in next to no time, as the report's
+    render counts do. The reference glasses of `core.agreement` are counted here and not in the
+    report's counts of the fit's renders."""
 
     def __init__(self, adapter: Any, side: Side, ledger: Ledger):
         self._adapter, self._side, self._ledger = adapter, side, ledger
 
     def __getattr__(self, name: str) -> Any:
+        if name == "_adapter":  # not yet set (a copy, an unpickling): no adapter to ask
+            raise AttributeError(name)
         return getattr(self._adapter, name)
 
     @property

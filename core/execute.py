@@ -122,7 +122,8 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
         fit = choose_scene(lambda sc: source(resolved.source_params, scene=sc), job.scene, env_ok,
                            job.settings.resolve_limit, job.settings.fit_scene,
                            smooth=resolved.source_spec.is_smooth(resolved.source_params) or resolved.target_spec.smooth,
-                           transmissive=resolved.source_spec.transmissive(resolved.source_params))
+                           transmissive=resolved.source_spec.transmissive(resolved.source_params),
+                           source_smooth=resolved.source_spec.is_smooth(resolved.source_params))
     renders = ProbeRenders(source, resolved.source_params, resolved.source_spec, target, fit.scene, given=job.scene,
                            given_noise=fit.scene_noise)
     informed = job.settings.start == "informed" and job.lookup is None and job.start is None
@@ -136,7 +137,7 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
                                                    job.settings.resolve_limit) if texturing else []) + \
         ([SmoothHeld(held=smooth)] if smooth else [])
     result = remap(resolved.target_spec, {**resolved.base, **start}, free, renders, job.settings, job.tuning,
-                   progress, alternatives=alternatives(resolved, start) if informed else [], notes=notes)
+                   progress, alternatives=alternatives(resolved, start, smooth) if informed else [], notes=notes)
     files = artifacts(adapters[tgt.adapter], tgt.model, result.params, renders.source_image(), result.target_image,
                       texturing)
     info = describe(adapters, list(dict.fromkeys((src.adapter, tgt.adapter))))
@@ -268,17 +269,20 @@ def _named(adapter, model: str, look, base: dict[str, Value], p, value: Value) -
     return adapter.from_appearance(model, look, {**base, p.name: other}).get(p.name) == value
 
 
-def alternatives(resolved: Resolved, start: dict[str, Value]) -> list[dict[str, Value]]:
+def alternatives(resolved: Resolved, start: dict[str, Value],
+                 smooth: dict[str, Value] | None = None) -> list[dict[str, Value]]:
     """The discrete choices to try: every value of each explorable choice (`ParamSpec.explore`)
-    that neither the user held, nor the source carried (same model), nor the start named, nor the
-    start makes inert (a distribution at roughness 0, held there for a smooth source).
+    that neither the user held, nor the source carried (same model), nor the start named; none
+    where ``smooth`` holds the target perfectly smooth (`smooth_held`: a mirror, whatever its
+    distribution).
     [] when there is nothing to try."""
     same = (resolved.job.source.adapter, resolved.job.source.model) == (resolved.job.target.adapter,
                                                                         resolved.job.target.model)
-    chosen = {**resolved.base, **start}
-    open_ = [p for p in resolved.target_spec.parameters if p.kind == "choice" and p.explore and not same
-             and p.name not in resolved.fixed and p.name not in start
-             and not resolved.target_spec.is_inert(p.name, chosen)]
+    spec = resolved.target_spec
+    if smooth and spec.smooth_when and all(smooth.get(k) == v for k, v in spec.smooth_when.items()):
+        return []  # a mirror: every microfacet distribution renders it alike (tests/adapters/test_cycles.py)
+    open_ = [p for p in spec.parameters if p.kind == "choice" and p.explore and not same
+             and p.name not in resolved.fixed and p.name not in start]
     combos: list[dict[str, Value]] = [{}]
     for p in open_:
         combos = [{**c, p.name: v} for c in combos for v in p.choices]

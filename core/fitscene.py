@@ -31,7 +31,7 @@ MAX_SPP_FACTOR = 16
 ENV_MIN_RESOLUTION = 32
 """A perfectly smooth (or near-mirror, opaque) source's studio fit scene is half the job's resolution, at least this: a
 quarter of the cost. The samples it takes to resolve it (up to 16 times the scene's) made these
-fits among the costliest of a library (a smooth plastic 150 s with `--jobs 2`, 25 s at half the
+fits among the costliest of a library (a smooth plastic 150 s with `--jobs 2`, 17 s at half the
 size), and judged under the held-out lights the fits at either size are the same (within 0.1-1.3
 points beyond the noise on the public corpus: docs/speed.md). A rough glass's is not halved: its
 light through the sphere is noisy at any samples (16-20 % at 256 spp), and a quarter of the pixels
@@ -64,13 +64,16 @@ def _samples_for(noise: float, spp: int) -> int:
 
 
 def choose(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, environment_ok: bool,
-           limit: float, policy: str = "auto", smooth: bool = False, transmissive: bool = False) -> FitScene:
+           limit: float, policy: str = "auto", smooth: bool = False, transmissive: bool = False,
+           source_smooth: bool = False) -> FitScene:
     """The fit scene for a source rendered by ``render(scene)``; ``environment_ok``: both adapters
     render the studio environment; ``limit``: the noise above which a scene cannot resolve;
     ``policy``: `Settings.fit_scene`; ``smooth``: the source or the target is a mirror or a smooth
     glass (`ModelSpec.smooth`), which shows a point light as a point at most; ``transmissive``: the
     source lets light through (a point light reaches what is seen through it by rare paths only:
-    a rough glass is 70-130 % noise under the probe at 16 spp, 10-15 % under the studio at 256)."""
+    a rough glass is 70-130 % noise under the probe at 16 spp, 10-15 % under the studio at 256);
+    ``source_smooth``: the source itself is smooth (the studio then at half the size: a rough glass
+    fitted to a smooth target keeps the full size)."""
     if policy == "as-given":
         return FitScene(scene)
     noise = source_noise(render, scene)
@@ -81,7 +84,7 @@ def choose(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, enviro
             "the source renders black under the scene's lights" if noise == math.inf else \
             f"light through the sphere, which a point light reaches by rare paths ({noise:.0%} noise at " \
             f"{scene.spp} spp)"
-        found = _environment(render, scene, noise, math.inf, why, half=smooth)
+        found = _environment(render, scene, noise, math.inf, why, half=source_smooth or not transmissive)
         if found is not None:
             return found
     if math.isinf(noise):  # black, and nowhere else to look: the engine says so

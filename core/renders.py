@@ -150,6 +150,9 @@ class ProbeRenders:
                 self._noise = relative_rmse(self.source_image(), second)
         return self._noise
 
+    def scene_chosen(self) -> bool:
+        return self.scene.cache_key() != self.job_scene.cache_key()
+
     def target_noise(self, params: dict[str, Value]) -> float:
         first = self.target(params, scene=self.scene)
         return relative_rmse(first, self.target(params, scene=self.scene.with_(seed=self.scene.seed + 1)))
@@ -172,11 +175,17 @@ class ProbeRenders:
                         resolution=self.point_resolution())
 
     def point_resolution(self) -> int:
-        """The frontal point-light conditions' resolution, from the source's highlight on the job's
-        scene (`core.validation.point_resolution`); the scene's when the fit ran elsewhere."""
-        if self.other_lights or self.job_scene.views:
+        """The frontal point-light conditions' resolution, from the source's highlight (its specular
+        lobe where it isolates one) on the job's scene (`core.validation.point_resolution`); the
+        scene's when the fit ran elsewhere, the job's lights are not point lights, or the source
+        lets light through."""
+        if self.other_lights or self.job_scene.views or self.job_scene.environment is not None \
+                or self.source_spec.transmissive(self.source_params):
             return self.job_scene.resolution
-        px = highlight_pixels(self.source_image()) * (self.job_scene.resolution / self.scene.resolution) ** 2
+        level = self.level(self.scene)
+        spec = level.source_lobes.get("specular")  # a plastic's highlight, not its diffuse shading
+        image = spec if spec is not None and float(np.max(spec)) > 0 else level.source
+        px = highlight_pixels(image) * (self.job_scene.resolution / self.scene.resolution) ** 2
         return point_resolution(self.job_scene, px)
 
     def agreement(self, params: dict[str, Value], validation: Validation, threshold: float, judged) -> Agreement:

@@ -27,12 +27,12 @@ from .renders import rounded
 from .scene import ProbeScene
 from .texturing import Textured
 
-SCHEMA_VERSION = 4
+SCHEMA_VERSION = 5
 """Bump whenever the fields change (an older reader refuses a field it does not know). 4: a job's
-table lookup, a textured source's record."""
+table lookup, a textured source's record; 5: the account of the job's renders."""
 READS_FROM = 3
-"""The oldest format read: 4 only added fields that are absent (None, empty) in every result 3 could
-hold, and the digest leaves them out while they are, so a stored result of 3 is read as it is."""
+"""The oldest format read: 4 and 5 only added fields that are absent (None, empty) in every result 3
+could hold, and the digest leaves them out while they are, so a stored result of 3 is read as it is."""
 
 
 class NewerReportError(ConfigError):

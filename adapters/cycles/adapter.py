@@ -48,7 +48,7 @@ def _worker_count() -> int:
                               field="BRDFREMAP_CYCLES_WORKERS")
         return n
     # One: each Blender renders on every core already, and two of them on 2 cores compete
-    # (bench/workers.py: a warm remap to Principled 0.55x as fast with two; a 32² render 70 ms
+    # (bench/workers.py: a warm remap to Principled 0.56x as fast with two; a 32² render 70 ms
     # in a batch over two workers against 10 ms alone). Once 1.03x as fast, before the fits
     # rendered their Jacobians' tries and polishes at small sizes, where Blender's start-up and
     # the two processes' contention outweigh the overlap.

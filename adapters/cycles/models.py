@@ -27,8 +27,6 @@ def _unit(name, default, fit=True, desc="", upper=1.0, **kw):
 # the dielectric's IOR and Specular IOR Level no longer reach the image (checked: identical
 # renders in Blender 5.0; tests/test_cycles.py keeps checking it).
 METAL = {"metallic": 1.0}
-# At roughness 0 every distribution is the same mirror (checked: identical renders under the studio).
-SMOOTH = {"roughness": 0.0}
 ISOTROPIC = {"anisotropic": 0.0}
 GLASS = {"transmission_weight": 1.0}
 NO_COAT, NO_SHEEN, NO_SSS, NO_FILM = ({"coat_weight": 0.0}, {"sheen_weight": 0.0}, {"subsurface_weight": 0.0},
@@ -42,7 +40,7 @@ PRINCIPLED = ModelSpec(
     description="Principled BSDF (multiscatter GGX by default). Lobes by render passes.",
     parameters=(
         ParamSpec(name="distribution", kind="choice", default="multi_ggx", choices=("multi_ggx", "ggx"), explore=True,
-                  inert_when=SMOOTH, description="Microfacet distribution of the Principled BSDF."),
+                  description="Microfacet distribution of the Principled BSDF."),
         ParamSpec(name="base_color", kind="rgb", default=(0.8, 0.8, 0.8), held_when=GLASS,
                   description="Base Color (a glass's tint, in and out: held, carried from the source)."),
         _unit("metallic", 0.0, desc="Metallic.", held_when=GLASS),
@@ -108,7 +106,7 @@ GLOSSY = ModelSpec(
     smooth_when={"roughness": 0.0},
     description="Glossy BSDF: a microfacet lobe with a constant colour (no Fresnel).",
     parameters=(
-        ParamSpec(name="distribution", kind="choice", default="ggx", explore=True, inert_when=SMOOTH,
+        ParamSpec(name="distribution", kind="choice", default="ggx", explore=True,
                   choices=("beckmann", "ggx", "ashikhmin_shirley", "multi_ggx"), description="Distribution."),
         ParamSpec(name="color", kind="rgb", default=(0.8, 0.8, 0.8), linear_in=("full", "specular"), description="Color."),
         _unit("roughness", 0.3, desc="Roughness (α = roughness²)."),
@@ -134,7 +132,7 @@ METALLIC = ModelSpec(
     description="Metallic BSDF with the physical conductor Fresnel (complex IOR per channel).",
     parameters=(
         ParamSpec(name="distribution", kind="choice", default="multi_ggx", choices=("beckmann", "ggx", "multi_ggx"),
-                  explore=True, inert_when=SMOOTH, description="Distribution."),
+                  explore=True, description="Distribution."),
         ParamSpec(name="ior", kind="rgb", lower=0.0, upper=8.0, default=(0.2, 0.4, 1.4), description="IOR (eta)."),
         ParamSpec(name="extinction", kind="rgb", lower=0.0, upper=10.0, default=(3.9, 2.4, 1.6),
                   description="Extinction (k)."),

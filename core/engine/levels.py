@@ -67,6 +67,10 @@ class Renders(Protocol):
     def target_noise(self, params: dict[str, Value]) -> float:
         """The same for the target with ``params``."""
 
+    def scene_chosen(self) -> bool:
+        """Whether the fit's scene was chosen for the source (more samples, the studio) rather than
+        being the job's own."""
+
     def validation(self, params: dict[str, Value]) -> Validation:
         """Source and target with ``params`` under held-out lights the fit never saw."""
 

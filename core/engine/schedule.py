@@ -306,9 +306,9 @@ def _polish_noise_limited(run: _Run, state: _State, assessment: Assessment, ceil
     samples, kept if it lowers the error there and does not raise the error at the scene's samples
     (the error reported) by more than `PRECISE_SLACK` (at the noise those two differ by noise
     alone), nor above ``ceiling`` (the start's error: a result is never worse than its start).
-    Not beyond `Tuning.precise_max_spp` samples where the fit's floor is within `precise_noisy`: a
-    fit scene of that many (a smooth plastic's studio at 256 spp, 2-3 % noise) reaches its noise
-    goal already, and its polish at 1024 spp cost 139 s of a 243 s job for 1.44 % -> 1.35 % there
+    Not beyond `Tuning.precise_max_spp` samples on a fit scene chosen for the source whose floor is
+    within `precise_noisy`: a fit scene of that many (a smooth plastic's studio at 256 spp, 2-3 %
+    noise) reaches its noise goal already, and its polish at 1024 spp cost 139 s of a 243 s job for 1.44 % -> 1.35 % there
     (a shiny plastic's 4.89 % -> 4.88 %). A rough glass's fit at 256 spp (16-20 % noise) is mostly
     noise, and its polish there halves its error beyond the noise (21 % -> 10 %): it runs.
     (Leaving it out wherever one render at k times the samples showed the fit within the noise
@@ -317,7 +317,7 @@ def _polish_noise_limited(run: _Run, state: _State, assessment: Assessment, ceil
     k, scene = run.settings.precise_spp, run.renders.scene
     if k <= 1 or not run.free or not state.err < run.tuning.precise_below * run.source_noise:
         return state, assessment
-    if scene.spp * k > run.tuning.precise_max_spp:
+    if scene.spp * k > run.tuning.precise_max_spp and run.renders.scene_chosen():
         with purpose("noise"):  # the fit's noise floor, as the verdict measures it (its renders are kept)
             floor = float(np.hypot(run.source_noise, run.renders.target_noise(state.params)) / np.sqrt(2))
         if floor <= run.tuning.precise_noisy:

@@ -40,9 +40,9 @@ class Tuning(Strict):
     precise_below: float = Field(3.0, gt=0, description="A fit ending within this many times the source's render "
                                                         "noise gets the polish at `Settings.precise_spp` samples.")
     precise_max_spp: int = Field(256, ge=1, description="The polish at more samples is left out where it would "
-                                                         "render more samples than this and the fit's noise floor is "
-                                                         "within `precise_noisy`: a fit scene at that many samples "
-                                                         "was chosen to reach its noise goal (`core.fitscene`).")
+                                                         "render more samples than this on a fit scene chosen for "
+                                                         "the source (`core.fitscene`: it reached its noise goal "
+                                                         "there) whose noise floor is within `precise_noisy`.")
     precise_noisy: float = Field(0.05, ge=0, description="A fit whose noise floor is above this gets the polish at "
                                                          "more samples at any cost (a rough glass under the studio: "
                                                          "16-20 % at 256 spp, its fit mostly noise there).")

@@ -1,6 +1,6 @@
 """What makes a remap cheaper without changing how it is judged (issue: fast), without a renderer:
-the account of every render, the frontal lights' resolution, and no tries of a choice the start
-makes inert. A real remap's account is checked in tests/e2e/test_remap_cycles.py."""
+the account of every render, the frontal lights' resolution, and no tries of a distribution for
+a mirror. A real remap's account is checked in tests/e2e/test_remap_cycles.py."""
 
 from __future__ import annotations
 
@@ -59,7 +59,7 @@ def test_frontal_point_lights_take_half_the_resolution_where_the_highlight_shows
     assert all(isinstance(x, PointLight) for x in CONDITIONS[2].lights)
 
 
-def test_no_tries_of_a_distribution_held_at_roughness_zero():
+def test_no_tries_of_a_distribution_for_a_target_held_smooth():
     from brdfremap.core.execute import alternatives
     from brdfremap.core.job import Job, Target, resolve
     from brdfremap.core.plugins import collect_adapters
@@ -71,4 +71,5 @@ def test_no_tries_of_a_distribution_held_at_roughness_zero():
         pytest.skip(why)
     src = Material(adapter="mitsuba", model="roughplastic", params={"distribution": "beckmann", "alpha": 0.2})
     job = resolve(Job(source=src, target=Target(adapter="cycles", model="principled"), label="m.yaml"), registry)
-    assert alternatives(job, {}) and not alternatives(job, {"roughness": 0.0})
+    assert alternatives(job, {}) and alternatives(job, {"roughness": 0.0})  # roughness 0 as a start: still fitted
+    assert not alternatives(job, {"roughness": 0.0}, smooth={"roughness": 0.0})  # held there: a mirror
