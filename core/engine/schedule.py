@@ -76,6 +76,10 @@ class _Run:
                       jacobian_updates=self.settings.jacobian_updates, seed=state.last, held=state.held,
                       good_enough=self.good_enough)
 
+    def noise_floor(self, target_noise: float) -> float:
+        """The error two renders of a perfect match would show: the verdict's noise floor."""
+        return float(np.hypot(self.source_noise, target_noise) / np.sqrt(2))
+
     def render_final(self, params: dict[str, Value], label: str = "final") -> tuple[np.ndarray, float]:
         image = np.asarray(self.scene.render(params, None), dtype=np.float32)
         self.tally.requests += 1
@@ -319,7 +323,7 @@ def _polish_noise_limited(run: _Run, state: _State, assessment: Assessment, ceil
         return state, assessment
     if scene.spp * k > run.tuning.precise_max_spp and run.renders.scene_chosen():
         with purpose("noise"):  # the fit's noise floor, as the verdict measures it (its renders are kept)
-            floor = float(np.hypot(run.source_noise, run.renders.target_noise(state.params)) / np.sqrt(2))
+            floor = run.noise_floor(run.renders.target_noise(state.params))
         if floor <= run.tuning.precise_noisy:
             return state, assessment
     level = run.renders.level(scene.with_(spp=scene.spp * k), lobes=False)
@@ -352,7 +356,7 @@ def _conclude(run: _Run, plan: Plan, state: _State, assessment: Assessment, join
         target_noise = run.renders.target_noise(state.params)
     with purpose("validation"):
         validation = run.renders.validation(state.params) if run.settings.validation == "held-out" else Validation()
-    floor = float(np.hypot(run.source_noise, target_noise) / np.sqrt(2))
+    floor = run.noise_floor(target_noise)
     limit = run.settings.resolve_limit
     judged = {"scene": floor <= limit, **{c.condition: c.noise_floor <= limit for c in validation.checks}}
     with purpose("agreement"):
