@@ -12,6 +12,7 @@ from typing import Callable, Protocol
 
 import numpy as np
 
+from ..metrics import l2
 from ..scene import ProbeScene
 from ..schemas import Value
 from .results import Agreement, Validation
@@ -41,7 +42,7 @@ class Level:
     @property
     def norm(self) -> float:
         """Residuals of every stage at this level are divided by the full source image's norm."""
-        return float(np.linalg.norm(np.asarray(self.source, dtype=np.float64)))
+        return l2(np.asarray(self.source, dtype=np.float64))
 
     def image(self, key: str | None) -> np.ndarray:
         """The source image a stage matches: the full one (None) or a lobe's."""

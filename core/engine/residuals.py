@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import OptimisationError
+from ..metrics import l2
 from .levels import ProgressFn, RenderFn
 from .space import ParamSpace
 
@@ -69,10 +70,10 @@ class Residuals:
             raise OptimisationError(f"stage {self.name}: residuals are not finite at {self.space.decode(u)}")
         self.memo[key] = r
         self._trials.append((u.copy(), r))
-        self._keep_best(u, float(np.linalg.norm(r)))
+        self._keep_best(u, l2(r))
         if self.progress:
             self.progress(self.name, self.tally.requests, self.best_err)
-        if self.good_enough > 0 and float(np.linalg.norm(r)) <= self.good_enough:
+        if self.good_enough > 0 and l2(r) <= self.good_enough:
             raise GoodEnough
         return r
 

@@ -9,6 +9,7 @@ from typing import Literal
 import numpy as np
 from scipy.optimize import least_squares
 
+from ..metrics import l2
 from .jacobian import Jacobian
 from .levels import ProgressFn, RenderFn
 from .residuals import BudgetExhausted, GoodEnough, Residuals, Tally
@@ -92,7 +93,7 @@ class Stage:
         errs = []
         for i, u in enumerate(self.starts(u_base)):
             r = self.residuals(u)
-            errs.append((float(np.linalg.norm(r)), i, u))
+            errs.append((l2(r), i, u))
             if lin is not None:
                 e, v = self._rescaled(u, r, lin)
                 errs.append((e, i, v))
@@ -172,7 +173,7 @@ class Stage:
             pred[ch] = (a * (v / old_vals[j]) - b) / res.norm
         params = dict(self.space.decode(u))
         params[name] = tuple(new_vals) if spec.kind == "rgb" else new_vals[0]
-        return float(np.linalg.norm(pred)), self.space.encode(params)
+        return l2(pred), self.space.encode(params)
 
 
 def _van_der_corput(n: int, base: int) -> float:
