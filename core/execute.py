@@ -106,6 +106,12 @@ def run_job(job: Job, renderer_files: tuple[str, ...] = (), progress: ProgressFn
         return execute(resolve(job, pool.registry), pool, progress)
 
 
+def fit_policy(job: Job) -> str:
+    """`Settings.fit_scene`, but a table's lookup is judged on the scene its direct fits saw: without
+    the back light's view (tables are built on the job's scene alone: `Settings.for_study`)."""
+    return "one-view" if job.lookup is not None and job.settings.fit_scene == "auto" else job.settings.fit_scene
+
+
 def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | None = None) -> Outcome:
     t0 = time.perf_counter()
     job = resolved.job
@@ -120,12 +126,12 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
     env_ok = all("environment" in adapters[n].light_types for n in (src.adapter, tgt.adapter))
     with purpose("fit scene"):
         fit = choose_scene(lambda sc: source(resolved.source_params, scene=sc), job.scene, env_ok,
-                           job.settings.resolve_limit, job.settings.fit_scene,
+                           job.settings.resolve_limit, fit_policy(job),
                            smooth=resolved.source_spec.is_smooth(resolved.source_params) or resolved.target_spec.smooth,
                            transmissive=resolved.source_spec.transmissive(resolved.source_params),
                            source_smooth=resolved.source_spec.is_smooth(resolved.source_params))
     renders = ProbeRenders(source, resolved.source_params, resolved.source_spec, target, fit.scene, given=job.scene,
-                           given_noise=fit.scene_noise)
+                           given_noise=fit.scene_noise, resolve_limit=job.settings.resolve_limit)
     informed = job.settings.start == "informed" and job.lookup is None and job.start is None
     smooth = smooth_held(resolved) if job.lookup is None else {}
     start = {**(informed_start(resolved, adapters) if informed else given_start(resolved)), **smooth}

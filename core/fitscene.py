@@ -12,7 +12,10 @@ from a mismatch. The source's own render noise says so before any fit. Then, in 
    reduces to one sub-pixel spot (bench/validation.py measures both);
 3. else the scene as it is (the verdict then says it cannot resolve the material).
 
-Each candidate is measured (two source renders) before it is taken."""
+Each candidate is measured (two source renders) before it is taken. A scene of point lights that
+stays (as given, or at more samples) gets a second view (`with_back_light`): the same sphere lit
+from behind, 100 degrees from the view, so that the fit sees the rim and the grazing Fresnel a
+front light never shows (`--fit-scene one-view` leaves it out)."""
 
 from __future__ import annotations
 
@@ -23,7 +26,8 @@ from typing import Callable
 import numpy as np
 
 from .metrics import relative_rmse
-from .scene import MAX_SPP, EnvironmentLight, ProbeScene
+from .scene import MAX_SPP, EnvironmentLight, PointLight, ProbeScene, View
+from .validation import place_light
 
 GOAL = 0.03
 """The source noise (relative RMSE between two seeds) a fit scene should reach."""
@@ -66,6 +70,55 @@ def _samples_for(noise: float, spp: int) -> int:
 def choose(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, environment_ok: bool,
            limit: float, policy: str = "auto", smooth: bool = False, transmissive: bool = False,
            source_smooth: bool = False) -> FitScene:
+    """The fit scene (`choose_lights`), with the back light's view where ``policy`` is auto."""
+    found = choose_lights(render, scene, environment_ok, limit, "auto" if policy == "one-view" else policy,
+                          smooth, transmissive, source_smooth)
+    if policy != "auto" or transmissive or found.scene.views or found.scene.environment is not None:
+        return found
+    return with_back_light(render, found)
+
+
+BACK = PointLight(theta=100.0, phi=-55.0)
+"""The back light of a fit's second view: behind the sphere's outline, 100 degrees from the view (the
+held-out grazing and rim lights are at 80 and 120, `core.validation`), on the side away from the
+probe's light."""
+
+
+BACK_WEIGHT = 0.25
+"""The back view's weight against the first's in the fit's squared relative error: the source's image
+there is scaled to this fraction of the first view's (squared norm)."""
+
+
+def with_back_light(render: Callable[[ProbeScene], np.ndarray], found: FitScene,
+                    weight: float = BACK_WEIGHT) -> FitScene:
+    """``found`` with a second view under `BACK`, placed as the held-out lights are (at the distance of
+    the scene's first light), its intensity scaled so that the source's image there weighs ``weight``
+    of the first view's in the fit's error (at one intensity a white Lambertian's back view weighs 55
+    times less, its lit crescent being 7 % of the pixels, where a metal's grazing reflection can
+    outweigh the front). Left out where the source is black from behind, or where its noise over
+    both views exceeds `GOAL` and the first view's own (a sharp grazing highlight)."""
+    scene = found.scene
+    light = place_light(BACK, scene)
+    back = scene.model_copy(update={"lights": [light]})
+    front_norm, back_norm = (float(np.linalg.norm(np.asarray(render(sc), np.float64))) for sc in (scene, back))
+    if back_norm <= 0.0 or front_norm <= 0.0:
+        return found
+    scale = float(np.sqrt(weight) * front_norm / back_norm)
+    light = light.model_copy(update={"intensity": light.intensity * scale})
+    both = scene.model_copy(update={"views": [View(camera=scene.camera, lights=[light])],
+                                    "name": f"{scene.name} and a back light"})
+    noise = source_noise(render, both)
+    if noise > max(GOAL, found.noise):
+        return found  # a highlight the back light makes sharper than the scene resolves: fitted on noise
+    why = f"{found.why}; " if found.why else ""
+    return FitScene(both, f"{why}with a second view lit from behind ({BACK.theta:g} degrees from the view, "
+                          f"weighing {weight:.0%} of the first): the rim and grazing reflection a front light does "
+                          "not show", noise, found.scene_noise or found.noise)
+
+
+def choose_lights(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, environment_ok: bool,
+                  limit: float, policy: str = "auto", smooth: bool = False, transmissive: bool = False,
+                  source_smooth: bool = False) -> FitScene:
     """The fit scene for a source rendered by ``render(scene)``; ``environment_ok``: both adapters
     render the studio environment; ``limit``: the noise above which a scene cannot resolve;
     ``policy``: `Settings.fit_scene`; ``smooth``: the source or the target is a mirror or a smooth

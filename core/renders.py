@@ -105,16 +105,20 @@ class ProbeRenders:
 
     def __init__(self, source: CachedRenderer, source_params: dict[str, Value], source_spec: ModelSpec,
                  target: CachedRenderer, scene: ProbeScene, given: ProbeScene | None = None,
-                 given_noise: float = 0.0):
+                 given_noise: float = 0.0, resolve_limit: float | None = None):
         self.source, self.source_params, self.source_spec = source, dict(source_params), source_spec
         self.target, self.scene = target, scene
         self.job_scene = given if given is not None else scene
         """The job's scene: the held-out lights take its camera, size and samples."""
-        self.other_lights = self.job_scene.with_(spp=scene.spp).cache_key() != scene.cache_key()
+        self.other_lights = self.job_scene.with_(spp=scene.spp).cache_key() != \
+            scene.view_scenes()[0].cache_key()
         """The fit ran under other lights than the job's (`core.fitscene`): those are checked too.
-        (A fit at more samples of the same lights measured the job's scene already.)"""
+        (A fit at more samples of the same lights, or with a back light's view added below them,
+        measured the job's scene already.)"""
         self.given_noise = given_noise
         """Two source renders' difference on the job's scene, measured before the fit."""
+        self.resolve_limit = resolve_limit
+        """A held-out condition noisier than this is rendered again at more samples where they can resolve it."""
         self._levels: dict[tuple[str, bool], Level] = {}
         self._noise: float | None = None
 
@@ -172,7 +176,7 @@ class ProbeRenders:
         return validate(lambda sc: self.source(self.source_params, scene=sc), lambda sc: self.target(params, scene=sc),
                         self.job_scene, problems, given=self.other_lights,
                         given_noise=self.given_noise, fit_lights=self.scene.view_scenes()[0].lights,
-                        resolution=self.point_resolution())
+                        resolution=self.point_resolution(), resolve_limit=self.resolve_limit)
 
     def point_resolution(self) -> int:
         """The frontal point-light conditions' resolution, from the source's highlight (its specular
@@ -184,7 +188,7 @@ class ProbeRenders:
             return self.job_scene.resolution
         level = self.level(self.scene)
         spec = level.source_lobes.get("specular")  # a plastic's highlight, not its diffuse shading
-        image = spec if spec is not None and float(np.max(spec)) > 0 else level.source
+        image = (spec if spec is not None and float(np.max(spec)) > 0 else level.source)[:self.scene.resolution]
         px = highlight_pixels(image) * (self.job_scene.resolution / self.scene.resolution) ** 2
         return point_resolution(self.job_scene, px)
 

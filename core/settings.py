@@ -31,10 +31,12 @@ class Settings(Strict):
     resolve_limit: float = Field(0.10, gt=0, lt=10, description="Noise floor (the error two renders of one "
                                                                 "material show) above which a scene cannot resolve "
                                                                 "the material: its own finding, whatever the error.")
-    fit_scene: Literal["auto", "samples", "as-given"] = Field(
-        "auto", description="Where the fit runs when the scene cannot resolve the source (its render noise over 3 %, "
-                            "e.g. a highlight smaller than a pixel): auto: more samples (up to 16x), else the studio "
-                            "environment; samples: more samples only; as-given: the scene as it is.")
+    fit_scene: Literal["auto", "one-view", "samples", "as-given"] = Field(
+        "auto", description="Where the fit runs. auto: the scene and a second view lit from behind (the rim and "
+                            "grazing reflection), or, where the scene cannot resolve the source (its render noise "
+                            "over 3 %, e.g. a highlight smaller than a pixel), more samples (up to 16x), else the "
+                            "studio environment; one-view: the same without the back light's view; samples: more "
+                            "samples only; as-given: the scene as it is (the paper's probe).")
     validation: Literal["held-out", "none"] = Field(
         "held-out", description="held-out: after the fit, render source and target under held-out "
                                                   "lights (grazing, rim, headlight, the studio environment) and "
@@ -51,6 +53,13 @@ class Settings(Strict):
         if 0 < v < 8:
             raise ValueError("must be 0 (off) or at least 8")
         return v
+
+    def for_study(self) -> "Settings":
+        """These settings for a table's or an experiment's fits: auto fits there on the job's scene
+        alone (one-view), without the back light's view. Their points are compared with the paper's
+        figures and with tables built before it, and a table's lookups are judged against what its
+        direct fits reached on that scene."""
+        return self.model_copy(update={"fit_scene": "one-view"}) if self.fit_scene == "auto" else self
 
 
 DEFAULTS = Settings()

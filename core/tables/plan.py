@@ -96,7 +96,7 @@ def _material(p: Plan, values: dict, name: str) -> Material:
 def point_task(p: Plan, registry: AdapterRegistry, slot: str, values: dict, title: str, scene, settings,
                lookup: Lookup | None = None, start: dict | None = None) -> Task:
     """The job of one point (a fit, a refit from ``start``, or a lookup's check) stored at ``slot``."""
-    job = Job(source=_material(p, values, slot), target=p.spec.target, scene=scene, settings=settings,
+    job = Job(source=_material(p, values, slot), target=p.spec.target, scene=scene, settings=settings.for_study(),
               label=f"{p.file} {slot}", lookup=lookup, start=start)
     where = Where(source_file=p.file, source_prefix="source.", params_prefix=f"{slot} ({shown(values)})",
                   target_file=p.file, target_prefix="target.", fix_prefix="target.fix")

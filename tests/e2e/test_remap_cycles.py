@@ -16,7 +16,10 @@ def _run(tmp_path, root, material, *args):
 @pytest.mark.parametrize("material, dist", [("copper.yaml", "beckmann"), ("copper-ggx.yaml", "ggx")])
 def test_same_family_mitsuba_conductor_to_cycles_glossy(tmp_path, root, mitsuba_adapter, cycles_adapter,
                                                         material, dist):
-    _, r = _run(tmp_path, root, material, "--adapter", "cycles", "--model", "glossy", "--fix", f"distribution={dist}")
+    # As the paper fits it, on the probe alone: the default's back light also shows the Fresnel Glossy
+    # lacks (copper: 1.99 % over both views at a 0.48 % floor, the same roughness within 0.2 %).
+    _, r = _run(tmp_path, root, material, "--adapter", "cycles", "--model", "glossy", "--fix", f"distribution={dist}",
+                "--fit-scene", "one-view")
     alpha = r["params"]["roughness"] ** 2  # Blender roughness = sqrt(alpha)
     assert abs(alpha / 0.2 - 1) < 0.03
     m = r["metrics"]
@@ -45,9 +48,11 @@ def test_main_job_gold_to_principled(tmp_path, root, mitsuba_adapter, cycles_ada
     # Beckmann gold -> multiscatter GGX has a floor near 18-21 %: a mismatch, flagged.
     assert 0.12 < r["metrics"]["relative_rmse"] < 0.25
     assert r["reliable"] is False
-    # Where its time went: every render of either side under a purpose, summing to the counts.
+    # Where its time went: every render of either side under a purpose, summing to the counts (but the
+    # renderers' reference materials, `agreement`, measured once a process and not the job's own renders).
     acc = r["account"]
-    by_side = {side: sum(s["renders"] for s in acc["renders"] if s["side"] == side) for side in ("source", "target")}
+    by_side = {side: sum(s["renders"] for s in acc["renders"] if s["side"] == side and s["purpose"] != "agreement")
+               for side in ("source", "target")}
     assert by_side == {"source": r["source_renders"], "target": r["renders"]}, acc
     purposes = {s["purpose"] for s in acc["renders"]}
     assert {"fit scene", "source", "tries", "fit", "validation"} <= purposes, purposes

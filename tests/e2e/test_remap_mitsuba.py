@@ -32,7 +32,7 @@ def test_gold_beckmann_to_ggx_writes_the_contract(tmp_path, root, mitsuba_adapte
     assert r["seconds"] > 0 and r["scheme"] == "auto" and r["scheme_used"] == "two"
     assert r["reliable"] is False and "model mismatch" in r["reason"]
     src, tgt = read_image(out / "source.exr"), read_image(out / "target.exr")
-    assert src.shape == tgt.shape == (128, 128, 3)
+    assert src.shape == tgt.shape == (256, 128, 3)  # the fit scene's two views: the probe, lit from behind below
     assert np.isclose(np.linalg.norm(tgt - src) / np.linalg.norm(src), m["relative_rmse"], rtol=1e-4)
     xml = (out / "material.xml").read_text()
     assert '<string name="distribution" value="ggx"/>' in xml and f'{r["params"]["alpha"]:.6g}' in xml
@@ -74,7 +74,7 @@ def test_a_two_stage_result_off_the_full_image_minimum_is_refined_jointly(tmp_pa
                    "diffuse_reflectance: [0.6, 0.08, 0.05], alpha: 0.5, int_ior: 1.3}\n")
     out = tmp_path / "out"
     assert main(["--source", str(mat), "--out", str(out), "--quiet", "--adapter", "mitsuba",
-                 "--model", "roughplastic", "--fix", "distribution=ggx"]) == 0
+                 "--model", "roughplastic", "--fix", "distribution=ggx", "--fit-scene", "one-view"]) == 0
     r = read_result(out / "result.json")
     assert r["scheme_used"] == "two"
     assert [s["name"] for s in r["stages"] if s["name"].startswith("joint")] == ["joint-refine", "joint-refine #2"]
@@ -115,7 +115,8 @@ def test_joint_rounds_that_do_not_realise_the_predicted_gain_leave_a_note_not_a_
     reg = collect_adapters()
     src = Material(adapter="mitsuba", model="ashikhmin_shirley", params={"material": "AlSb", "alpha": 0.05})
     job = Job(source=src, target=Target(adapter="mitsuba", model="ward", fix={"diffuse_reflectance": 0.0}),
-              settings=Settings(jacobian_updates=0, start="defaults", validation="none"),  # the probe's verdict
+              settings=Settings(jacobian_updates=0, start="defaults", validation="none",  # the probe's verdict
+                                fit_scene="one-view"),  # as Fig. 5 fits it
               tuning=Tuning(min_highlight_px=0))  # the 32 px coarse level the case was measured with
     pool = AdapterPool(reg)
     pool.open["mitsuba"] = mitsuba_adapter  # the session's adapter: not closed here

@@ -163,3 +163,28 @@ def test_a_blend_weighted_by_a_texture_is_still_two_bsdfs(tmp_path):
     formats = collect_formats()
     (entry,) = read_all(expand_inputs([str(path)], formats), formats)
     assert entry.material is not None and entry.textured == ["weight <- bitmap 'm.png'"]
+
+
+def test_a_front_lit_fit_scene_gets_a_back_light_view_weighted_like_the_front():
+    """By default a scene of point lights that resolves the source is fitted with a second view lit
+    from behind (`core.fitscene.with_back_light`); its intensity makes the source's back view weigh
+    `BACK_WEIGHT` of the first. Left out with --fit-scene one-view or as-given, and where the fit runs
+    elsewhere."""
+    from brdfremap.core.fitscene import BACK, BACK_WEIGHT
+    from brdfremap.core.testing import analytic_lambert
+
+    scene = ProbeScene(resolution=32)
+
+    def lambert(sc):
+        return np.concatenate([analytic_lambert(v) for v in sc.view_scenes()], axis=0)
+
+    got = choose(lambert, scene, environment_ok=True, limit=0.1)
+    assert len(got.scene.views) == 1 and got.scene.view_scenes()[0].cache_key() == scene.cache_key()
+    back = got.scene.views[0].lights[0]
+    assert abs(back.theta - BACK.theta) < 1e-6 and "lit from behind" in got.why
+    front, rear = np.linalg.norm(analytic_lambert(scene)), np.linalg.norm(lambert(got.scene)[32:])
+    assert abs(rear / front - BACK_WEIGHT ** 0.5) < 1e-3, (front, rear)
+    for policy in ("one-view", "as-given", "samples"):
+        assert not choose(lambert, scene, environment_ok=True, limit=0.1, policy=policy).scene.views, policy
+    smooth = choose(lambert, scene, environment_ok=True, limit=0.1, smooth=True)
+    assert smooth.scene.environment is not None and not smooth.scene.views
