@@ -9,7 +9,12 @@ otherwise whatever its model. So where either side transmits, each adapter's cle
 environment lights it (under a point light it is black), the rough one under point lights. Their
 images are compared in 8 x 8 pixel blocks (light through a rough glass comes in rare bright
 samples); beyond the noise and over the threshold, that condition's error is the renderers', not
-the model's. Measurements are kept for the process: a library's glasses are rendered once."""
+the model's. Measurements are kept for the process: a library's glasses are rendered once.
+
+Opaque or not, each adapter's white Lambertian (`Adapter.calibration`) is compared the same way
+under each held-out condition: how far the two renderers differ on the simplest material there
+(Cycles and Mitsuba 3.2 % under the rim light, a command-line renderer more) is a floor that a
+material's error there is judged beyond, as it is judged beyond the render noise."""
 
 from __future__ import annotations
 
@@ -66,17 +71,58 @@ def compare(one: Adapter, other: Adapter, condition: str, label: str, scenes: tu
                         beyond_noise=far)
 
 
+def _calibration_pair(adapter: Adapter, scenes: tuple[ProbeScene, ProbeScene]) -> tuple[np.ndarray, np.ndarray]:
+    model, given = adapter.calibration  # type: ignore[misc]
+    params = adapter.models[model].complete(given)
+    return tuple(check_image(adapter.render(model, params, sc), sc, f"adapter {adapter.name!r} calibration material")
+                 .astype(np.float64) for sc in scenes)  # type: ignore[return-value]
+
+
+def calibration_floor(one: Adapter, other: Adapter, condition: str, label: str,
+                      scenes: tuple[ProbeScene, ProbeScene]) -> Disagreement | None:
+    """The two adapters' white Lambertians under one condition (two renders each, at these two scenes'
+    seeds), compared pixel by pixel: a Disagreement when they differ beyond the noise at all."""
+    key = ("calibration", one.name, one.identity(), other.name, other.identity(), scenes[0].cache_key(),
+           scenes[1].cache_key())
+    if key not in _MEASURED:
+        a, b = _calibration_pair(one, scenes), _calibration_pair(other, scenes)
+        if len(_MEASURED) >= KEEP:
+            _MEASURED.pop(next(iter(_MEASURED)))
+        _MEASURED[key] = (relative_rmse((a[0] + a[1]) / 2, (b[0] + b[1]) / 2),
+                          float(np.hypot(relative_rmse(*a), relative_rmse(*b)) / 2)) if a[0].any() else (0.0, 0.0)
+    err, floor = _MEASURED[key]
+    far = beyond_noise(err, floor)
+    if far <= 0.0:
+        return None
+    return Disagreement(condition=condition, label=label, kind="white Lambertian", error=err, noise_floor=floor,
+                        beyond_noise=far)
+
+
+def calibration_floors(source: Adapter, target: Adapter,
+                       conditions: list[tuple[str, str, tuple[ProbeScene, ProbeScene]]]) -> dict[str, Disagreement]:
+    """How far the two renderers differ on a white Lambertian under each held-out condition (not the fit
+    scene, whose differences the fit absorbs): measured once a process for each pair and scene. None
+    where an adapter declares no calibration material, or both sides are one renderer."""
+    if getattr(source, "unmetered", source) is getattr(target, "unmetered", target) or \
+            source.calibration is None or target.calibration is None:
+        return {}
+    found = (calibration_floor(source, target, name, label, scenes)
+             for name, label, scenes in conditions if name != "scene")
+    return {d.condition: d for d in found if d is not None}
+
+
 def agreement(source: Adapter, target: Adapter, transmissive: bool,
               conditions: list[tuple[str, str, tuple[ProbeScene, ProbeScene]]], threshold: float,
               judged: Callable[[str], bool] = lambda c: True) -> Agreement:
     """Whether the two adapters agree under these conditions (name, label, two scenes of other seeds)
     on a material of this kind; ``judged(name)``: whether the verdict judges that condition."""
+    floors = calibration_floors(source, target, [c for c in conditions if judged(c[0])])
     if not transmissive or getattr(source, "unmetered", source) is getattr(target, "unmetered", target):
-        return Agreement()
+        return Agreement(floors=floors)
     lacking = [a.name for a in (source, target) if not {"smooth", "rough"} <= set(a.glasses)]
     if lacking:
         return Agreement(unchecked=f"adapter {' and '.join(repr(n) for n in lacking)} declares no clear glasses "
-                                   "(Adapter.glasses), so their light through a sphere is not compared")
+                                   "(Adapter.glasses), so their light through a sphere is not compared", floors=floors)
     found = [compare(source, target, name, label, scenes, threshold)
              for name, label, scenes in conditions if judged(name)]
-    return Agreement(checked=True, disagree=[d for d in found if d is not None])
+    return Agreement(checked=True, disagree=[d for d in found if d is not None], floors=floors)

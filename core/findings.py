@@ -12,7 +12,10 @@ from pydantic import Field, computed_field
 
 from .model import Strict, WithDerived
 
-Severity = Literal["unreliable", "note"]
+Severity = Literal["unreliable", "unchecked", "note"]
+"""unreliable: the result is not to be trusted; unchecked: a condition it is judged under could not be
+resolved, so it was not checked there (with nothing unreliable, the verdict is "unchecked", never ok);
+note: what was done or seen, which changes no verdict."""
 
 
 class _Finding(WithDerived):
@@ -58,9 +61,14 @@ class HeldOutError(Strict):
     condition: str
     label: str
     error: float
-    beyond_noise: float
+    beyond_noise: float = Field(description="The error beyond the render noise and, where they differ, the "
+                                            "renderers' own difference on a white Lambertian there.")
+    renderers: float = Field(0.0, description="That difference of the renderers' (beyond their noise); 0: none.")
 
     def words(self) -> str:
+        if self.renderers > 0:
+            return f"{self.label} {self.error:.1%} ({self.beyond_noise:.1%} beyond the noise and the renderers' " \
+                   f"{self.renderers:.1%} on a white Lambertian)"
         return f"{self.label} {self.error:.1%}" + (
             "" if self.beyond_noise >= 0.995 * self.error else f" ({self.beyond_noise:.1%} beyond the noise)")
 
@@ -75,6 +83,23 @@ class HeldOutAbove(_Finding):
     def sentence(self) -> str:
         return (f"does not look the same under held-out lights: {', '.join(c.words() for c in self.conditions)}, "
                 f"over the {self.threshold:.0%} threshold")
+
+
+class RenderersFloor(_Note):
+    """Under one held-out condition the two renderers differ even on a white Lambertian, and the
+    result's error there is within that difference: the renderers', not the material's."""
+
+    kind: Literal["renderers_floor"] = "renderers_floor"
+    condition: str
+    label: str
+    error: float = Field(description="The two renderers' white Lambertians' relative RMSE there.")
+    beyond_noise: float
+    result_error: float = Field(description="The result's own error there.")
+
+    def sentence(self) -> str:
+        return (f"the renderers disagree by {self.error:.1%} under the {self.label} even on a white Lambertian "
+                f"({self.beyond_noise:.1%} beyond the noise): the result's {self.result_error:.1%} there is within "
+                "their difference, not the material's")
 
 
 class RenderersDisagree(_Finding):
@@ -124,18 +149,22 @@ class CannotResolve(_Finding):
     limit: float
     advice: str
     elsewhere: bool = Field(False, description="Other conditions did resolve the material and judge the result: "
-                                               "then this one is a note.")
+                                               "then this one is unchecked (not unreliable).")
+    checked: list[str] = Field(default_factory=list, description="The conditions that did judge the result.")
+    spp: int = Field(0, description="The samples it was last rendered at (0: not said).")
 
     @computed_field  # type: ignore[prop-decorator]
     @property
     def severity(self) -> Severity:
-        return "note" if self.elsewhere else "unreliable"
+        return "unchecked" if self.elsewhere else "unreliable"
 
     def sentence(self) -> str:
         where = self.label
         if self.elsewhere:
-            return (f"{where} cannot resolve this material (two renders of one material differ by "
-                    f"{self.noise_floor:.0%}, over the {self.limit:.0%} limit): not judged there")
+            at = f" at {self.spp} spp" if self.spp else ""
+            judged = f"; checked under {', '.join(self.checked)}" if self.checked else ""
+            return (f"not checked under {where.removeprefix('the ')}: two renders of one material differ by "
+                    f"{self.noise_floor:.0%} there{at}, over the {self.limit:.0%} limit{judged}")
         return (f"{where} cannot resolve this material: two renders of one material differ by {self.noise_floor:.0%} "
                 f"(over the {self.limit:.0%} limit), so its error says nothing; {self.advice}")
 
@@ -399,7 +428,8 @@ class NoisePolished(_Note):
 
 
 Finding = Annotated[
-    Union[ErrorAboveThreshold, ModelMismatch, TableMismatch, HeldOutAbove, RenderersDisagree, TransportUnchecked,
+    Union[ErrorAboveThreshold, ModelMismatch, TableMismatch, HeldOutAbove, RenderersDisagree, RenderersFloor,
+          TransportUnchecked,
           CannotResolve, ImagePrecision, NoEffect, IllConditioned,
           NotAtMinimum,
           PinnedOnBound, RendererAlters, ValidationSkipped, NothingFitted, TableLookup, TexturedAbove, TexturedNotes,
@@ -408,13 +438,14 @@ Finding = Annotated[
     Field(discriminator="kind"),
 ]
 
-Status = Literal["ok", "mismatch", "unreliable"]
+Status = Literal["ok", "mismatch", "unreliable", "unchecked"]
 
 
 class Verdict(Strict):
-    """The findings, and what they add up to: ok (nothing unreliable), mismatch (only a model
-    mismatch, and the held-out lights it shows under: the closest this target model gets) or
-    unreliable."""
+    """The findings, and what they add up to: ok (nothing unreliable, and every condition resolved),
+    mismatch (only a model mismatch, and the held-out lights it shows under: the closest this target
+    model gets), unreliable, or unchecked (nothing unreliable where it was checked, but some condition
+    could not resolve the material: not ok, and said apart)."""
 
     status: Status
     findings: list[Finding] = Field(default_factory=list)
@@ -423,7 +454,7 @@ class Verdict(Strict):
     def of(cls, findings: list) -> "Verdict":
         problems = [f for f in findings if f.severity == "unreliable"]
         if not problems:
-            status: Status = "ok"
+            status: Status = "unchecked" if any(f.severity == "unchecked" for f in findings) else "ok"
         elif any(isinstance(f, (ModelMismatch, TableMismatch)) for f in problems) and all(
                 isinstance(f, (ModelMismatch, TableMismatch, HeldOutAbove)) for f in problems):
             status = "mismatch"  # the closest this model gets, under the held-out lights too
@@ -440,10 +471,16 @@ class Verdict(Strict):
         return [f for f in self.findings if f.severity == "unreliable"]
 
     @property
+    def unchecked(self) -> list:
+        return [f for f in self.findings if f.severity == "unchecked"]
+
+    @property
     def notes(self) -> list[str]:
-        return [f.message for f in self.findings if f.severity == "note"]
+        """The notes, and what was not checked where something else makes the result unreliable."""
+        return [f.message for f in self.findings
+                if f.severity == "note" or (f.severity == "unchecked" and self.status != "unchecked")]
 
     @property
     def reason(self) -> str:
-        """The unreliable findings' sentences, joined; "ok" when there are none."""
-        return "; ".join(f.message for f in self.problems) or "ok"
+        """The unreliable findings' sentences, joined; else what was not checked; "ok" when neither."""
+        return "; ".join(f.message for f in self.problems) or "; ".join(f.message for f in self.unchecked) or "ok"

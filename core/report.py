@@ -27,11 +27,12 @@ from .renders import rounded
 from .scene import ProbeScene
 from .texturing import Textured
 
-SCHEMA_VERSION = 5
+SCHEMA_VERSION = 6
 """Bump whenever the fields change (an older reader refuses a field it does not know). 4: a job's
-table lookup, a textured source's record; 5: the account of the job's renders."""
+table lookup, a textured source's record; 5: the account of the job's renders; 6: the renderers'
+difference on a white Lambertian in a held-out error (`renderers`) and its note (`renderers_floor`)."""
 READS_FROM = 3
-"""The oldest format read: 4 and 5 only added fields that are absent (None, empty) in every result 3
+"""The oldest format read: 4 to 6 only added fields that are absent (None, empty, 0) in every result 3
 could hold, and the digest leaves them out while they are, so a stored result of 3 is read as it is."""
 
 
@@ -117,7 +118,8 @@ class Report(WithDerived):
     scheme_used: str
     verdict: Status = Field(description="ok (holds under the scene's lights and every held-out one); mismatch "
                                         "(only a model mismatch: the closest this target model gets); unreliable "
-                                        "(see findings).")
+                                        "(see findings); unchecked (nothing unreliable where it was checked, but "
+                                        "a condition could not resolve the material: not checked there).")
     findings: list[Finding]
     fit_scene: FitSceneRecord | None = Field(description="Where the fit ran when not on the job's scene (which "
                                                           "could not resolve the source), and why; None: the job's.")
@@ -143,7 +145,7 @@ class Report(WithDerived):
     @computed_field  # type: ignore[prop-decorator]
     @property
     def reason(self) -> str:
-        """The unreliable findings' sentences; "ok" when there are none."""
+        """The unreliable findings' sentences, else what was not checked; "ok" when neither."""
         return self.as_verdict().reason
 
     @computed_field  # type: ignore[prop-decorator]
@@ -155,12 +157,16 @@ class Report(WithDerived):
     @property
     def digest(self) -> str:
         """SHA-256 of the rest of the document: a report edited after it was written is not
-        taken for the job's result. Fields of format 4 are left out while absent (see `READS_FROM`)."""
+        taken for the job's result. Fields of formats 4 to 6 are left out while absent (see `READS_FROM`)."""
         doc = self.model_dump(mode="json", exclude={"digest"})
         for container, key in ((doc, "textures"), (doc, "account"), (doc["job"], "lookup"), (doc["job"], "start"),
                                (doc["job"]["source"], "textures")):
             if not container.get(key):
                 container.pop(key, None)
+        for finding in doc["findings"]:  # format 6's `renderers`, while 0
+            for cond in finding.get("conditions", []) if finding.get("kind") == "held_out_above" else []:
+                if not cond.get("renderers"):
+                    cond.pop("renderers", None)
         return hashlib.sha256(json.dumps(doc, sort_keys=True, ensure_ascii=False).encode()).hexdigest()
 
     def as_verdict(self) -> Verdict:

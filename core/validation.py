@@ -61,7 +61,7 @@ TURNED = 180.0
 """The studio's rotation when the fit itself ran under the studio: held out, it must be other light."""
 
 
-def _placed(light: PointLight, scene: ProbeScene) -> PointLight:
+def place_light(light: PointLight, scene: ProbeScene) -> PointLight:
     """A condition's light about the scene's sphere (its angles from the view axis, as written),
     at the distance and intensity of the scene's first point light, or the default probe's scaled
     to the sphere's radius."""
@@ -84,7 +84,7 @@ def _held_out(c: Condition, scene: ProbeScene, fit_keys: list) -> Condition:
     turned round when the fit saw the studio itself."""
     if c.given:
         return c
-    lights = tuple(_placed(x, scene) if isinstance(x, PointLight) else x for x in c.lights)
+    lights = tuple(place_light(x, scene) if isinstance(x, PointLight) else x for x in c.lights)
     if any(isinstance(x, EnvironmentLight) and x.key() in fit_keys for x in lights):
         lights = tuple(x.model_copy(update={"rotation": (x.rotation + TURNED) % 360})
                        if isinstance(x, EnvironmentLight) else x for x in lights)
@@ -166,35 +166,64 @@ def _mean_and_noise(render, a: ProbeScene, b: ProbeScene) -> tuple[np.ndarray, f
     return ((first + second) / 2).astype(np.float32), relative_rmse(first, second) / 2
 
 
+RESOLVE_FACTOR = 8
+"""A condition whose noise floor is over the resolve limit is rendered again at up to this many times
+its samples, when the noise (∝ 1/√spp) predicts that brings it within the limit; else it is left
+unresolved (the verdict then says it was not checked)."""
+
+
+def _more_samples(floor: float, limit: float | None, spp: int) -> int | None:
+    """The samples per half that bring ``floor`` at ``spp`` within ``limit`` (a power of two times
+    ``spp``, with a fifth to spare), or None: resolved already, or beyond `RESOLVE_FACTOR`."""
+    if limit is None or floor <= limit:
+        return None
+    k = 2 ** int(np.ceil(np.log2(1.2 * (floor / limit) ** 2)))
+    return spp * k if k <= RESOLVE_FACTOR and spp * k <= MAX_SPP else None
+
+
+def _check(render_source, render_target, cond: Condition, a: ProbeScene, b: ProbeScene, scene: ProbeScene,
+           given_noise: float) -> Check | str:
+    """One condition's check from two renders a side, or why it has none (the source black there)."""
+    src, src_noise = _mean_and_noise(render_source, a, b)
+    if not np.any(src > 0):
+        return "the source renders black under this light"
+    tgt, tgt_noise = _mean_and_noise(render_target, *_other_seeds(a, b))
+    err = relative_rmse(src, tgt)
+    floor = float(np.hypot(src_noise, tgt_noise))
+    if cond.given:
+        # Where a few samples carry the image (the sub-pixel highlight that sent the fit
+        # elsewhere) one pair of renders is itself a lucky draw: two seeds of Au α 0.002 at
+        # 64 spp differed by 3 % where a third differs from them by 70 %. The difference measured
+        # before the fit, scaled to these samples, is a second estimate; the larger is taken.
+        floor = max(floor, given_noise * float(np.sqrt(scene.spp / (2 * a.spp))))
+    return Check(condition=cond.name, label=cond.label, description=cond.description, spp=2 * a.spp,
+                 resolution=a.resolution, error=err, perceptual=delta_e_itp(src, tgt), noise_floor=floor,
+                 beyond_noise=beyond_noise(err, floor), given=cond.given)
+
+
 def validate(render_source, render_target, scene: ProbeScene, problems, given: bool = False,
-             given_noise: float = 0.0, fit_lights=(), resolution: int | None = None) -> Validation:
+             given_noise: float = 0.0, fit_lights=(), resolution: int | None = None,
+             resolve_limit: float | None = None) -> Validation:
     """Render both sides under every condition (``render_*(scene) -> image``); ``problems(scene)``
     says why a side cannot render a condition (a light type it lacks), which is then skipped.
     ``given``: the fit ran under other lights than ``scene``'s, whose own are checked first;
     ``given_noise``: two source renders' difference there at ``scene.spp``, measured before the fit;
     ``fit_lights``: the lights the fit ran under (the studio among them is turned for its check);
-    ``resolution``: the frontal point lights' (`point_resolution`)."""
+    ``resolution``: the frontal point lights' (`point_resolution`); ``resolve_limit``: a condition
+    noisier than this is rendered again at more samples where that can resolve it (`_more_samples`)."""
     result = Validation()
     for cond, a, b in held_out_scenes(scene, given, fit_lights, resolution):
         why = problems(a) or _problem(a)
         if why:
             result.skipped[cond.name] = why
             continue
-        src, src_noise = _mean_and_noise(render_source, a, b)
-        if not np.any(src > 0):
-            result.skipped[cond.name] = "the source renders black under this light"
-            continue
-        tgt, tgt_noise = _mean_and_noise(render_target, *_other_seeds(a, b))
-        err = relative_rmse(src, tgt)
-        floor = float(np.hypot(src_noise, tgt_noise))
-        if cond.given:
-            # Where a few samples carry the image (the sub-pixel highlight that sent the fit
-            # elsewhere) one pair of renders is itself a lucky draw: two seeds of Au α 0.002 at
-            # 64 spp differed by 3 % where a third differs from them by 70 %. The difference measured
-            # before the fit, scaled to these samples, is a second estimate; the larger is taken.
-            floor = max(floor, given_noise * float(np.sqrt(scene.spp / (2 * a.spp))))
-        result.checks.append(Check(condition=cond.name, label=cond.label, description=cond.description,
-                                   spp=2 * a.spp, resolution=a.resolution, error=err,
-                                   perceptual=delta_e_itp(src, tgt), noise_floor=floor,
-                                   beyond_noise=beyond_noise(err, floor), given=cond.given))
+        check = _check(render_source, render_target, cond, a, b, scene, given_noise)
+        more = None if isinstance(check, str) else _more_samples(check.noise_floor, resolve_limit, a.spp)
+        if more is not None:
+            check = _check(render_source, render_target, cond, a.with_(spp=more), b.with_(spp=more), scene,
+                           given_noise)
+        if isinstance(check, str):
+            result.skipped[cond.name] = check
+        else:
+            result.checks.append(check)
     return result

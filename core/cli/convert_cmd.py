@@ -77,9 +77,9 @@ def _print(result, out) -> None:
         print(f"  {i.status}: {i.entry.name} ({i.entry.file}): {i.reason}")
     done = [i for i in result.items if i.done is not None and i.done.report is not None and not i.done.resumed]
     if done:
-        secs = sum(i.done.report.seconds for i in done)
-        print(f"time        {result.seconds:.1f} s in all; {secs / len(done):.1f} s a material remapped this run "
-              f"({len(done)})")
+        jobs = {i.done.report.key: i.done.report.seconds for i in done}  # a job several materials share, once
+        print(f"time        {result.seconds:.1f} s in all; {sum(jobs.values()) / len(done):.1f} s a material "
+              f"remapped this run ({len(done)}, {len(jobs)} distinct jobs)")
     for note in result.library_notes:
         print(f"note        {note}")
     print(f"libraries   {', '.join(f'{out}/{p.name}' for p in result.libraries) or 'none'}")

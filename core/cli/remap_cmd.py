@@ -140,7 +140,7 @@ def _textures(t) -> str:
 
 def _verdict(r: Report) -> str:
     """The status and why; an ok that only some conditions could judge names them."""
-    word = {"ok": "ok", "mismatch": "MISMATCH", "unreliable": "UNRELIABLE"}[r.verdict]
+    word = {"ok": "ok", "mismatch": "MISMATCH", "unreliable": "UNRELIABLE", "unchecked": "UNCHECKED"}[r.verdict]
     if not r.reliable:
         return f"{word}: {r.reason}"
     limit = r.job.settings.resolve_limit

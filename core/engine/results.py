@@ -66,7 +66,7 @@ class Disagreement(Strict):
 
     condition: str = Field(description="'scene' (the fit's) or a held-out condition.")
     label: str
-    kind: str = Field(description="The reference compared (smooth glass, rough glass).")
+    kind: str = Field(description="The reference compared (smooth glass, rough glass, white Lambertian).")
     error: float
     noise_floor: float
     beyond_noise: float
@@ -81,6 +81,10 @@ class Agreement:
     disagree: list[Disagreement] = field(default_factory=list)
     unchecked: str = ""
     """Why they could not be compared, where they should have been."""
+    floors: dict[str, Disagreement] = field(default_factory=dict)
+    """By held-out condition: how far the two renderers' white Lambertians (`Adapter.calibration`)
+    differ there beyond their noise, where they do: a floor no material's error can be asked to go
+    below (`core.agreement.calibration_floors`)."""
 
 
 @dataclass

@@ -23,6 +23,7 @@ from ..findings import (
     TableLookup,
     RendererAlters,
     RenderersDisagree,
+    RenderersFloor,
     TransportUnchecked,
     ValidationSkipped,
     Verdict,
@@ -72,14 +73,17 @@ def _errors(ev: Evidence) -> list:
     """The fit scene's error and each held-out condition's, judged beyond the noise. Where the noise
     floor is over the limit nothing is judged: a finding that says so, a note while another
     condition resolves the material (the verdict rests on those), else unreliable. Where the
-    renderers draw this kind of material otherwise, a condition's error is theirs: said so instead."""
-    resolved = (ev.noise_floor <= ev.resolve_limit) + sum(c.noise_floor <= ev.resolve_limit
-                                                          for c in ev.validation.checks)
+    renderers draw this kind of material otherwise, a condition's error is theirs: said so instead. A
+    held-out error is judged beyond the renderers' own difference on a white Lambertian there too
+    (`Agreement.floors`), as beyond the noise: within it, a note says the difference is theirs."""
+    checked = (["the fit scene"] if ev.noise_floor <= ev.resolve_limit else []) + \
+        [f"the {c.label}" for c in ev.validation.checks if c.noise_floor <= ev.resolve_limit]
+    resolved = len(checked)
     theirs = {d.condition: d for d in ev.agreement.disagree}
     out: list = []
     if ev.noise_floor > ev.resolve_limit:
         out.append(CannotResolve(condition="scene", label="the scene", noise_floor=ev.noise_floor,
-                                 limit=ev.resolve_limit, advice=SCENE_ADVICE, elsewhere=resolved > 0))
+                                 limit=ev.resolve_limit, advice=SCENE_ADVICE, elsewhere=resolved > 0, checked=checked))
     elif ev.beyond_noise > ev.threshold and "scene" not in theirs:
         out.append(ErrorAboveThreshold(error=ev.error, threshold=ev.threshold, beyond_noise=ev.beyond_noise))
     if "scene" in theirs:
@@ -88,12 +92,20 @@ def _errors(ev: Evidence) -> list:
     for c in ev.validation.checks:
         if c.noise_floor > ev.resolve_limit:
             out.append(CannotResolve(condition=c.condition, label=f"the {c.label}", noise_floor=c.noise_floor,
-                                     limit=ev.resolve_limit, advice=HELD_OUT_ADVICE, elsewhere=resolved > 0))
+                                     limit=ev.resolve_limit, advice=HELD_OUT_ADVICE, elsewhere=resolved > 0,
+                                     checked=checked, spp=c.spp))
         elif c.condition in theirs:
             out.append(_disagree(theirs[c.condition], c.error if c.beyond_noise > ev.threshold else None))
         elif c.beyond_noise > ev.threshold:
-            above.append(HeldOutError(condition=c.condition, label=c.label, error=c.error,
-                                      beyond_noise=c.beyond_noise))
+            floor = ev.agreement.floors.get(c.condition)
+            pair = floor.beyond_noise if floor is not None else 0.0
+            far = beyond_noise(c.beyond_noise, pair)
+            if far > ev.threshold:
+                above.append(HeldOutError(condition=c.condition, label=c.label, error=c.error, beyond_noise=far,
+                                          renderers=pair))
+            else:
+                out.append(RenderersFloor(condition=c.condition, label=c.label, error=floor.error,
+                                          beyond_noise=pair, result_error=c.error))
     if above:
         out.append(HeldOutAbove(conditions=above, threshold=ev.threshold))
     return out

@@ -12,7 +12,7 @@ from ..schemas import format_value
 if TYPE_CHECKING:
     from .convert import Conversion, Item
 
-RANK = {"failed": 0, "unsupported": 1, "unreliable": 2, "mismatch": 3, "ok": 4, "pending": 5}
+RANK = {"failed": 0, "unsupported": 1, "unreliable": 2, "unchecked": 3, "mismatch": 4, "ok": 5, "pending": 6}
 
 
 def _order(item: "Item") -> tuple:
