@@ -49,7 +49,7 @@ def accuracy(args) -> None:
             t0 = time.perf_counter()
             table = read_table(path)
             spec = table.spec
-            settings = spec.options.model_copy(update={"validation": "none"})
+            settings = spec.options.for_study().model_copy(update={"validation": "none"})
             drawn = table.layout.draw(args.n, args.seed)
             store = Store(Path(args.out) / Path(path).resolve().name)
             jobs = [Job(source=Material(adapter=spec.source.adapter, model=spec.source.model,

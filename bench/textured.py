@@ -73,7 +73,7 @@ def _fit_each_texel(table, tmap, registry, w, drawn, out):
     from brdfremap.core.tables.lookup import look_up
 
     spec = table.spec
-    settings = spec.options.model_copy(update={"validation": "none"})
+    settings = spec.options.for_study().model_copy(update={"validation": "none"})
     tasks, lookups = [], []
     for i, values in enumerate(drawn):
         src = Material(adapter=spec.source.adapter, model=spec.source.model, params={**spec.source.params, **values},

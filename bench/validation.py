@@ -119,13 +119,25 @@ def held_out(pool, case: tuple, params: dict, moved: bool) -> dict:
     fitted = t_spec.complete(params)
     fit = choose(lambda sc: src(s_params, scene=sc), scene, True, Settings().resolve_limit) if moved else None
     v = validate(lambda sc: src(s_params, scene=sc), lambda sc: tgt(fitted, scene=sc), scene, lambda sc: None,
-                 fit_lights=fit.scene.lights if fit else scene.lights)
+                 fit_lights=fit.scene.view_scenes()[0].lights if fit else scene.lights, resolve_limit=LIMIT)
     source_image, second = src(s_params), scene.with_(seed=1)
     probe_floor = float(np.hypot(relative_rmse(source_image, src(s_params, scene=second)),
                                  relative_rmse(tgt(fitted), tgt(fitted, scene=second))) / np.sqrt(2))
     return {"probe": relative_rmse(source_image, tgt(fitted)), "probe_floor": probe_floor,
             "held_out": {c.condition: {"error": c.error, "noise_floor": c.noise_floor,
                                        "beyond_noise": c.beyond_noise} for c in v.checks}}
+
+
+def moved(doc: dict) -> bool:
+    """Whether the tool fitted elsewhere than the job's scene (more samples, the studio): its fit
+    scene's first view differs from the job's (a back light's view added below it is not a move)."""
+    from brdfremap.core.scene import ProbeScene
+
+    fs = doc.get("fit_scene")
+    if not fs:
+        return False
+    first = ProbeScene.model_validate(fs["scene"]).view_scenes()[0]
+    return first.cache_key() != ProbeScene.model_validate(doc["job"]["scene"]).view_scenes()[0].cache_key()
 
 
 def evaluate(pool, case: tuple, doc: dict) -> dict:
@@ -140,10 +152,11 @@ def evaluate(pool, case: tuple, doc: dict) -> dict:
         "case": case[0], "verdict": doc["verdict"], "problems": findings, "reported": doc["metrics"]["relative_rmse"],
         "noise_floor": doc["metrics"]["noise_floor"],
         "start_at_scene": relative_rmse(src(s_params), tgt(start)),
-        "fit_scene": (doc.get("fit_scene") or {}).get("why", ""),
+        "fit_scene": (doc.get("fit_scene") or {}).get("why", "") if moved(doc) else "",
+        "views": (doc.get("fit_scene") or {}).get("why", "") if not moved(doc) else "",
         "error_fitted": doc["metrics"]["relative_rmse"], "start_error_fitted": doc["metrics"].get("start_error"),
         "threshold": doc["metrics"]["threshold"], "renders": doc["renders"], "seconds": doc["seconds"],
-        "params": doc["params"], **held_out(pool, case, doc["params"], bool(doc.get("fit_scene"))),
+        "params": doc["params"], **held_out(pool, case, doc["params"], moved(doc)),
     }
 
 

@@ -163,7 +163,7 @@ class CannotResolve(_Finding):
         if self.elsewhere:
             at = f" at {self.spp} spp" if self.spp else ""
             judged = f"; checked under {', '.join(self.checked)}" if self.checked else ""
-            return (f"not checked under {where.removeprefix('the ')}: two renders of one material differ by "
+            return (f"not checked under {where}: two renders of one material differ by "
                     f"{self.noise_floor:.0%} there{at}, over the {self.limit:.0%} limit{judged}")
         return (f"{where} cannot resolve this material: two renders of one material differ by {self.noise_floor:.0%} "
                 f"(over the {self.limit:.0%} limit), so its error says nothing; {self.advice}")

@@ -25,7 +25,7 @@ from typing import Callable
 
 import numpy as np
 
-from .metrics import relative_rmse
+from .metrics import l2, relative_rmse
 from .scene import MAX_SPP, EnvironmentLight, PointLight, ProbeScene, View
 from .validation import place_light
 
@@ -70,18 +70,24 @@ def _samples_for(noise: float, spp: int) -> int:
 def choose(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, environment_ok: bool,
            limit: float, policy: str = "auto", smooth: bool = False, transmissive: bool = False,
            source_smooth: bool = False) -> FitScene:
-    """The fit scene (`choose_lights`), with the back light's view where ``policy`` is auto."""
-    found = choose_lights(render, scene, environment_ok, limit, "auto" if policy == "one-view" else policy,
-                          smooth, transmissive, source_smooth)
-    if policy != "auto" or transmissive or found.scene.views or found.scene.environment is not None:
+    """The fit scene (`choose_lights`; one-view chooses as auto does), with the back light's view where
+    ``policy`` is auto and the chosen scene is one of point lights that resolves the source."""
+    back_view = policy == "auto"
+    found = choose_lights(render, scene, environment_ok, limit, "auto" if back_view else policy, smooth,
+                          transmissive, source_smooth)
+    if not back_view or transmissive or found.scene.views or found.scene.environment is not None \
+            or not found.noise <= limit:
         return found
     return with_back_light(render, found)
 
 
-BACK = PointLight(theta=100.0, phi=-55.0)
+BACK = PointLight(theta=100.0)
 """The back light of a fit's second view: behind the sphere's outline, 100 degrees from the view (the
-held-out grazing and rim lights are at 80 and 120, `core.validation`), on the side away from the
-probe's light."""
+held-out grazing and rim lights are at 80 and 120, `core.validation`), on the side opposite the
+scene's first light (`with_back_light`)."""
+MAX_SCALE = 1000.0
+"""The back light's intensity is at most this many times the scene's light's (a source nearly black
+from behind is not fitted on its amplified noise)."""
 
 
 BACK_WEIGHT = 0.25
@@ -98,12 +104,14 @@ def with_back_light(render: Callable[[ProbeScene], np.ndarray], found: FitScene,
     outweigh the front). Left out where the source is black from behind, or where its noise over
     both views exceeds `GOAL` and the first view's own (a sharp grazing highlight)."""
     scene = found.scene
-    light = place_light(BACK, scene)
+    first = next(iter(scene.point_lights), None)
+    light = place_light(BACK.model_copy(update={"phi": (first.phi + 180.0) % 360.0}) if first else BACK, scene)
     back = scene.model_copy(update={"lights": [light]})
-    front_norm, back_norm = (float(np.linalg.norm(np.asarray(render(sc), np.float64))) for sc in (scene, back))
-    if back_norm <= 0.0 or front_norm <= 0.0:
+    front_norm, back_norm = (l2(render(sc)) for sc in (scene, back))
+    if back_norm <= 0.0 or front_norm <= 0.0 or np.sqrt(weight) * front_norm / back_norm > MAX_SCALE:
         return found
-    scale = float(np.sqrt(weight) * front_norm / back_norm)
+    # Rounded: the intensity is part of every render's key, which must not depend on the last bit.
+    scale = float(f"{np.sqrt(weight) * front_norm / back_norm:.6g}")
     light = light.model_copy(update={"intensity": light.intensity * scale})
     both = scene.model_copy(update={"views": [View(camera=scene.camera, lights=[light])],
                                     "name": f"{scene.name} and a back light"})

@@ -142,7 +142,7 @@ def preview(image: np.ndarray, scale: float) -> np.ndarray:
 
 
 def _enlarge(px: np.ndarray) -> np.ndarray:
-    k = -(-PREVIEW_SIZE // px.shape[0])
+    k = -(-PREVIEW_SIZE // px.shape[1])  # by the width: a fit scene's views stack below each other
     return np.repeat(np.repeat(px, k, axis=0), k, axis=1) if k > 1 else px
 
 

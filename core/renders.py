@@ -37,6 +37,11 @@ def rounded(params: dict[str, Value]) -> dict[str, Value]:
     return {k: _round(v) for k, v in params.items()}
 
 
+def _first_view(scene: ProbeScene) -> str:
+    """The key of a scene's first view: its lights, camera, size and samples."""
+    return scene.view_scenes()[0].cache_key()
+
+
 class CachedRenderer:
     """One adapter's model, rendered through a cache; ``cache.misses`` counts real renders."""
 
@@ -110,8 +115,7 @@ class ProbeRenders:
         self.target, self.scene = target, scene
         self.job_scene = given if given is not None else scene
         """The job's scene: the held-out lights take its camera, size and samples."""
-        self.other_lights = self.job_scene.with_(spp=scene.spp).cache_key() != \
-            scene.view_scenes()[0].cache_key()
+        self.other_lights = _first_view(self.job_scene.with_(spp=scene.spp)) != _first_view(scene)
         """The fit ran under other lights than the job's (`core.fitscene`): those are checked too.
         (A fit at more samples of the same lights, or with a back light's view added below them,
         measured the job's scene already.)"""
@@ -155,7 +159,9 @@ class ProbeRenders:
         return self._noise
 
     def scene_chosen(self) -> bool:
-        return self.scene.cache_key() != self.job_scene.cache_key()
+        """Whether the fit's scene was chosen for the source (more samples, the studio); a back light's
+        view added below the job's scene is not such a choice."""
+        return _first_view(self.scene) != _first_view(self.job_scene)
 
     def target_noise(self, params: dict[str, Value]) -> float:
         first = self.target(params, scene=self.scene)
@@ -195,7 +201,8 @@ class ProbeRenders:
     def agreement(self, params: dict[str, Value], validation: Validation, threshold: float, judged) -> Agreement:
         transmissive = self.source_spec.transmissive(self.source_params) or \
             self.target.adapter.models[self.target.model].transmissive(params)
-        fit = (self.scene.with_(seed=self.scene.seed + 2), self.scene.with_(seed=self.scene.seed + 3))
+        first = self.scene.view_scenes()[0]  # adapters render one view at a time
+        fit = (first.with_(seed=first.seed + 2), first.with_(seed=first.seed + 3))
         conditions = [("scene", "fit scene", fit)] + [
             (c.name, c.label, (a, b)) for c, a, b in held_out_scenes(self.job_scene, self.other_lights,
                                                                        self.scene.view_scenes()[0].lights,

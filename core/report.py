@@ -31,9 +31,10 @@ SCHEMA_VERSION = 6
 """Bump whenever the fields change (an older reader refuses a field it does not know). 4: a job's
 table lookup, a textured source's record; 5: the account of the job's renders; 6: the renderers'
 difference on a white Lambertian in a held-out error (`renderers`) and its note (`renderers_floor`)."""
-READS_FROM = 3
-"""The oldest format read: 4 to 6 only added fields that are absent (None, empty, 0) in every result 3
-could hold, and the digest leaves them out while they are, so a stored result of 3 is read as it is."""
+READS_FROM = 6
+"""The oldest format read. 4 and 5 only added fields (left out of the digest while absent), but 6
+changed what a verdict is (an unresolved condition is unchecked, no longer a note of an ok) and what
+its findings hold, and a result of 5 or before is run again (its engine is older too)."""
 
 
 class NewerReportError(ConfigError):
@@ -157,16 +158,12 @@ class Report(WithDerived):
     @property
     def digest(self) -> str:
         """SHA-256 of the rest of the document: a report edited after it was written is not
-        taken for the job's result. Fields of formats 4 to 6 are left out while absent (see `READS_FROM`)."""
+        taken for the job's result. Fields of format 4 are left out while absent (see `READS_FROM`)."""
         doc = self.model_dump(mode="json", exclude={"digest"})
         for container, key in ((doc, "textures"), (doc, "account"), (doc["job"], "lookup"), (doc["job"], "start"),
                                (doc["job"]["source"], "textures")):
             if not container.get(key):
                 container.pop(key, None)
-        for finding in doc["findings"]:  # format 6's `renderers`, while 0
-            for cond in finding.get("conditions", []) if finding.get("kind") == "held_out_above" else []:
-                if not cond.get("renderers"):
-                    cond.pop("renderers", None)
         return hashlib.sha256(json.dumps(doc, sort_keys=True, ensure_ascii=False).encode()).hexdigest()
 
     def as_verdict(self) -> Verdict:

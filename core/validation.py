@@ -181,12 +181,15 @@ def _more_samples(floor: float, limit: float | None, spp: int) -> int | None:
     return spp * k if k <= RESOLVE_FACTOR and spp * k <= MAX_SPP else None
 
 
+BLACK = "the source renders black under this light"
+
+
 def _check(render_source, render_target, cond: Condition, a: ProbeScene, b: ProbeScene, scene: ProbeScene,
-           given_noise: float) -> Check | str:
-    """One condition's check from two renders a side, or why it has none (the source black there)."""
+           given_noise: float) -> Check | None:
+    """One condition's check from two renders a side; None where the source renders black there."""
     src, src_noise = _mean_and_noise(render_source, a, b)
     if not np.any(src > 0):
-        return "the source renders black under this light"
+        return None
     tgt, tgt_noise = _mean_and_noise(render_target, *_other_seeds(a, b))
     err = relative_rmse(src, tgt)
     floor = float(np.hypot(src_noise, tgt_noise))
@@ -218,12 +221,12 @@ def validate(render_source, render_target, scene: ProbeScene, problems, given: b
             result.skipped[cond.name] = why
             continue
         check = _check(render_source, render_target, cond, a, b, scene, given_noise)
-        more = None if isinstance(check, str) else _more_samples(check.noise_floor, resolve_limit, a.spp)
+        more = None if check is None else _more_samples(check.noise_floor, resolve_limit, a.spp)
         if more is not None:
             check = _check(render_source, render_target, cond, a.with_(spp=more), b.with_(spp=more), scene,
                            given_noise)
-        if isinstance(check, str):
-            result.skipped[cond.name] = check
+        if check is None:
+            result.skipped[cond.name] = BLACK
         else:
             result.checks.append(check)
     return result

@@ -139,19 +139,9 @@ def _textures(t) -> str:
 
 
 def _verdict(r: Report) -> str:
-    """The status and why; an ok that only some conditions could judge names them."""
+    """The status and why (an unchecked result names the lights that judged it and those that could not)."""
     word = {"ok": "ok", "mismatch": "MISMATCH", "unreliable": "UNRELIABLE", "unchecked": "UNCHECKED"}[r.verdict]
-    if not r.reliable:
-        return f"{word}: {r.reason}"
-    limit = r.job.settings.resolve_limit
-    judged = [c.label for c in r.validation if c.noise_floor <= limit]
-    unresolved = [c.label for c in r.validation if c.noise_floor > limit]
-    if not unresolved:
-        return word
-    if r.metrics.noise_floor <= limit:
-        judged.insert(0, "the fit scene")
-    return (f"{word}, judged under {', '.join(judged)} only: "
-            f"{', '.join(unresolved)} cannot resolve this material (render noise over {limit:.0%})")
+    return word if r.reliable else f"{word}: {r.reason}"
 
 
 def _start(r: Report) -> tuple[str, str]:

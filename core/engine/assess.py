@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import lsq_linear
 
+from ..metrics import l2
 from ..schemas import ModelSpec, Value
 from .levels import Level
 from .residuals import Tally
@@ -99,7 +100,7 @@ def _joint_gain(chk: _Check, tuning: Tuning, good_enough: float) -> float | None
     predicts what a joint fit could still gain (the lobe split can miss a coupling)."""
     rr = float(chk.r @ chk.r)
     step = lsq_linear(chk.J, -chk.r, bounds=(-chk.u, 1.0 - chk.u))
-    predicted = max(float(np.linalg.norm(chk.J @ step.x + chk.r)), good_enough)
+    predicted = max(l2(chk.J @ step.x + chk.r), good_enough)
     gain = math.sqrt(rr) - predicted
     return predicted if gain > max(0.15 * math.sqrt(rr), tuning.joint_min_gain) else None
 

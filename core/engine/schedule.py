@@ -14,7 +14,7 @@ import numpy as np
 from ..account import purpose
 from ..errors import OptimisationError
 from ..findings import ChoiceTried, JointRefined, NoisePolished, PredictionNotRealised, StartKept
-from ..metrics import delta_e_itp, relative_rmse
+from ..metrics import delta_e_itp, l2, relative_rmse
 from ..schemas import ModelSpec, Value
 from ..settings import Settings
 from .assess import Assessment, assess
@@ -178,7 +178,7 @@ def _check_source(source: np.ndarray) -> None:
         raise OptimisationError(f"`source` must be an H x W x 3 image, got shape {source.shape}")
     if not np.isfinite(source).all():
         raise OptimisationError("`source` has NaN or Inf pixels")
-    if float(np.linalg.norm(source.astype(np.float64))) == 0.0:
+    if l2(source) == 0.0:
         raise OptimisationError("`source` image is black: nothing to match (check the light and the material)")
 
 

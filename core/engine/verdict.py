@@ -100,7 +100,7 @@ def _errors(ev: Evidence) -> list:
             floor = ev.agreement.floors.get(c.condition)
             pair = floor.beyond_noise if floor is not None else 0.0
             far = beyond_noise(c.beyond_noise, pair)
-            if far > ev.threshold:
+            if far > ev.threshold or floor is None:
                 above.append(HeldOutError(condition=c.condition, label=c.label, error=c.error, beyond_noise=far,
                                           renderers=pair))
             else:

@@ -44,7 +44,7 @@ class Leg:
     @property
     def unstable(self) -> bool:
         """Unreliable for a reason other than a converged model mismatch (trimmed, pinned, ...)."""
-        return self.verdict in ("unreliable", "unchecked")
+        return self.verdict == "unreliable"
 
 
 @dataclass

@@ -152,7 +152,7 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
         colour_renders, colour_seconds = refits_account(folder, colours, "colours", follow=tuple(spec.follow))
         table = table.model_copy(update={"build": BuildRecord(
             points=len(final), used=sum(pt.used for pt in final),
-            flagged=sum(pt.verdict in ("unreliable", "unchecked", "failed") for pt in final),
+            flagged=sum(pt.verdict in ("unreliable", "failed") for pt in final),
             left_out=sum(not pt.used for pt in final), holdout=len(held),
             renders=sum(pt.renders for pt in firsts + held + first_colours) + renders + refit_renders + colour_renders,
             seconds=sum(pt.seconds for pt in firsts + held + first_colours) + seconds + refit_seconds + colour_seconds,

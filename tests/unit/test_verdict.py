@@ -72,11 +72,11 @@ def test_an_unresolvable_condition_is_never_passed_while_another_judges_the_resu
     something else is unreliable, that is the verdict and the unchecked light a note."""
     v = _judge(0.036, 0.012, [_check("rim", 4.5, 2.3), _check("environment", 0.029, 0.012)])
     assert v.status == "unchecked" and not v.reliable
-    assert v.reason == ("not checked under rim light: two renders of one material differ by 230% there at 64 spp, "
+    assert v.reason == ("not checked under the rim light: two renders of one material differ by 230% there at 64 spp, "
                         "over the 10% limit; checked under the fit scene, the environment light"), v.reason
     v = _judge(0.036, 0.012, [_check("rim", 4.5, 2.3), _check("environment", 0.20, 0.012)])
     assert v.status == "unreliable" and "studio" not in v.reason and "environment light 20.0%" in v.reason
-    assert any(n.startswith("not checked under rim light") for n in v.notes)
+    assert any(n.startswith("not checked under the rim light") for n in v.notes)
     assert _judge(0.036, 0.012, [_check("environment", 0.029, 0.012)]).status == "ok"
 
 
