@@ -22,6 +22,18 @@ SCENE = ProbeScene(resolution=48, spp=16)
 CALIBRATION = ProbeScene(resolution=64, spp=64)
 ALBEDO = 0.8
 CALIBRATION_TOLERANCE, LOBE_TOLERANCE = 0.01, 1e-4
+HALF_EPS = 2.0 ** -11
+"""A half float's relative rounding (0.05 %): a renderer that writes only half-float EXR (POV-Ray) rounds
+each pixel by at most this, far below the render noise a fit meets (0.3 % and more at 16 spp) and the
+fit's finite-difference steps; it passes, with a note, and the lobes' sum is allowed its rounding."""
+HALF_LOBE_TOLERANCE = 4 * HALF_EPS
+"""Three half-float images (the full one and each lobe) round apart by up to about this."""
+
+
+def _half(img: np.ndarray) -> bool:
+    lit = np.asarray(img, np.float32)
+    lit = lit[lit > 0]
+    return bool(lit.size) and np.array_equal(lit, lit.astype(np.float16).astype(np.float32))
 FACTORS = {"π": math.pi, "1/π": 1 / math.pi, "2": 2.0, "1/2": 0.5, "4π": 4 * math.pi, "1/(4π)": 1 / (4 * math.pi),
            "2π": 2 * math.pi, "1/(2π)": 1 / (2 * math.pi)}
 """Scale errors with a usual cause: radiance against irradiance (π), power against intensity (4π)."""
@@ -129,8 +141,10 @@ def lobes(render: Callable, models: dict) -> Row:
         full = render(model, p, SCENE)
         err = relative_rmse(full, render(model, p, SCENE, "diffuse") + render(model, p, SCENE, "specular"))
         checked += 1
-        if err >= LOBE_TOLERANCE:
-            return Row(name, False, f"model {model}: the lobes' sum is {err:.2e} from the full image",
+        tolerance = HALF_LOBE_TOLERANCE if _half(full) else LOBE_TOLERANCE
+        if err >= tolerance:
+            return Row(name, False, f"model {model}: the lobes' sum is {err:.2e} from the full image (allowed "
+                       f"{tolerance:.0e}{' for half floats' if tolerance > LOBE_TOLERANCE else ''})",
                        "each lobe's overrides must switch the other lobe off and nothing else; if precision fails "
                        "too, fix that first (rounding breaks the sum)")
     return Row(name, True, f"{checked} model(s) with two lobes" if checked else "no model with two lobes")
@@ -153,9 +167,10 @@ def precision(render: Callable, white: tuple[str, dict] | None) -> Row:
     if levels:
         return Row(name, False, f"every pixel is one of 256 {levels} levels: an 8-bit image",
                    "write float EXR, PFM or HDR")
-    lit = img[img > 0]
-    if lit.size and np.array_equal(lit, lit.astype(np.float16).astype(np.float32)):
-        return Row(name, False, "every pixel is a half float", "write 32-bit float pixels (half floats round at 0.1 %)")
+    if _half(img):
+        return Row(name, True, f"brightest {top:.3g} (expected {float(want.max()):.3g}); every pixel is a half float: "
+                   f"they round at {HALF_EPS:.2%}, far below the render noise and the fit's steps, so they pass",
+                   "32-bit float pixels, where the renderer can write them, leave nothing to round")
     return Row(name, True, f"brightest {top:.3g} (expected {float(want.max()):.3g})")
 
 

@@ -73,6 +73,17 @@ def captured_stderr():
             box["text"] = tmp.read().decode("utf-8", "replace").strip()
 
 
+def _bottom_up(path: Path) -> bool:
+    """A PFM (magic "PF" or "Pf") stores the image's bottom row first, and OpenImageIO 3.0 hands its
+    rows back as stored: one written as the format says (every PFM writer) reads upside down unless
+    flipped. (OpenImageIO opens it as "pnm", as it does the top-down PPM: hence the magic.)"""
+    try:
+        with open(path, "rb") as f:
+            return f.read(2) in (b"PF", b"Pf")
+    except OSError:
+        return False
+
+
 def read_rgb(path: Path) -> tuple[np.ndarray | None, str, int]:
     """(pixels H x W x 3 float32, or None; why not; channel count). Never prints."""
     import OpenImageIO as oiio
@@ -85,6 +96,8 @@ def read_rgb(path: Path) -> tuple[np.ndarray | None, str, int]:
             nch = inp.spec().nchannels
             pixels = inp.read_image(0, 0, 0, 3, "float") if nch >= 3 else None
             why = oiio.geterror() if pixels is None and nch >= 3 else ""
+            if pixels is not None and _bottom_up(path):
+                pixels = pixels[::-1]
             inp.close()
     if not why:
         lines = err["text"].splitlines()

@@ -142,7 +142,10 @@ class RendererDef(BaseModel):
             lobes: dict[str, LobeSpec] = {}
             raw = {k: v for k, v in m.lobes.items()}
             short = {k: v for k, v in raw.items() if isinstance(v, dict) and "overrides" not in v and "params" not in v}
-            _refuse_ambiguous(name, numeric, short)
+            # Held parameters (fit: false) are set, never fitted: no stage needs them, so no lobe.
+            _refuse_ambiguous(name, [p.name for p in m.parameters if p.kind != "choice" and (p.fit or p.fit_when
+                                                                                            or p.fit_when_carried)],
+                              short)
             for lobe, v in raw.items():
                 if v == "empty":
                     lobes[lobe] = LobeSpec(empty=True)
@@ -161,9 +164,10 @@ class RendererDef(BaseModel):
 
 
 def _refuse_ambiguous(model: str, numeric: list[str], short: dict[str, dict]) -> None:
-    """Both lobes in the short form, and parameters neither switches off: the short form would give
-    them all to the specular stage, a colour both lobes share included (the first new user's model
-    reached 57.8 % that way). The long form says which lobe each belongs to."""
+    """Both lobes in the short form, and fitted parameters neither switches off: the short form would
+    give them all to the specular stage, a colour both lobes share included (the first new user's model
+    reached 57.8 % that way). The long form says which lobe each belongs to. ``numeric``: the fitted
+    numeric parameters (a held one belongs to no stage, and the form it is in cannot harm a fit)."""
     if set(short) != {"diffuse", "specular"}:
         return
     left = [p for p in numeric if p not in short["diffuse"] and p not in short["specular"]]
