@@ -162,9 +162,8 @@ class CannotResolve(_Finding):
         where = self.label
         if self.elsewhere:
             at = f" at {self.spp} spp" if self.spp else ""
-            judged = f"; checked under {', '.join(self.checked)}" if self.checked else ""
             return (f"not checked under {where}: two renders of one material differ by "
-                    f"{self.noise_floor:.0%} there{at}, over the {self.limit:.0%} limit{judged}")
+                    f"{self.noise_floor:.0%} there{at}, over the {self.limit:.0%} limit")
         return (f"{where} cannot resolve this material: two renders of one material differ by {self.noise_floor:.0%} "
                 f"(over the {self.limit:.0%} limit), so its error says nothing; {self.advice}")
 
@@ -482,5 +481,12 @@ class Verdict(Strict):
 
     @property
     def reason(self) -> str:
-        """The unreliable findings' sentences, joined; else what was not checked; "ok" when neither."""
-        return "; ".join(f.message for f in self.problems) or "; ".join(f.message for f in self.unchecked) or "ok"
+        """The unreliable findings' sentences, joined; else what was not checked and what was; "ok"
+        when neither."""
+        if self.problems:
+            return "; ".join(f.message for f in self.problems)
+        if self.unchecked:
+            checked = getattr(self.unchecked[0], "checked", [])
+            return "; ".join(f.message for f in self.unchecked) + (
+                f"; checked under {', '.join(checked)}" if checked else "; checked under no light")
+        return "ok"
