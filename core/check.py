@@ -14,6 +14,7 @@ from typing import Callable
 
 import numpy as np
 
+from .imageio import HALF_EPS
 from .metrics import beyond_noise, eight_bit, relative_rmse
 from .scene import EnvironmentLight, PointLight, ProbeScene
 from .testing import analytic_glass, analytic_lambert, scene_for, sphere_hits
@@ -22,10 +23,6 @@ SCENE = ProbeScene(resolution=48, spp=16)
 CALIBRATION = ProbeScene(resolution=64, spp=64)
 ALBEDO = 0.8
 CALIBRATION_TOLERANCE, LOBE_TOLERANCE = 0.01, 1e-4
-HALF_EPS = 2.0 ** -11
-"""A half float's relative rounding (0.05 %): a renderer that writes only half-float EXR (POV-Ray) rounds
-each pixel by at most this, far below the render noise a fit meets (0.3 % and more at 16 spp) and the
-fit's finite-difference steps; it passes, with a note, and the lobes' sum is allowed its rounding."""
 HALF_LOBE_TOLERANCE = 4 * HALF_EPS
 """Three half-float images (the full one and each lobe) round apart by up to about this."""
 

@@ -73,6 +73,13 @@ def captured_stderr():
             box["text"] = tmp.read().decode("utf-8", "replace").strip()
 
 
+HALF_EPS = 2.0 ** -11
+"""A half float's relative rounding (0.05 %): a renderer that writes only half-float EXR (POV-Ray) rounds
+each pixel by at most this, far below the render noise a fit meets (0.3 % and more at 16 spp) and the
+fit's finite-difference steps: `remap check` passes it, with a note, and allows the lobes' sum its
+rounding."""
+
+
 def _bottom_up(path: Path) -> bool:
     """A PFM (magic "PF" or "Pf") stores the image's bottom row first, and OpenImageIO 3.0 hands its
     rows back as stored: one written as the format says (every PFM writer) reads upside down unless

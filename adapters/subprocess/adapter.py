@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 from brdfremap.core.errors import ConfigError, RenderError
-from brdfremap.core.imageio import pixel_format, read_rgb
+from brdfremap.core.imageio import HALF_EPS, pixel_format, read_rgb
 from brdfremap.core.protocol import Adapter
 from brdfremap.core.scene import ProbeScene
 from brdfremap.core.schemas import Value, format_value
@@ -274,9 +274,9 @@ class SubprocessAdapter(Adapter):
             if self.warned_depth:
                 return
             self.warned_depth = True
-        print(f"warning: renderer {self.definition.name!r} writes {fmt} pixels to {output.suffix}: a fit needs "
-              "32-bit float (half floats round at 0.1 %, finer than a Jacobian's steps); set the renderer's output "
-              "to float32", file=sys.stderr)
+        print(f"note: renderer {self.definition.name!r} writes {fmt} pixels to {output.suffix}: they round at "
+              f"{HALF_EPS:.2%}, far below the render noise and a fit's steps, so they serve; 32-bit float, where "
+              "the renderer can write it, leaves nothing to round", file=sys.stderr)
 
     def close(self) -> None:
         if self.worker is not None:
