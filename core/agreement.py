@@ -32,6 +32,9 @@ _MEASURED: dict[tuple, tuple[float, float]] = {}
 """(error, noise floor) of two adapters' glasses at two scenes, kept for the process (a library's
 glasses are rendered once); at most `KEEP` entries."""
 KEEP = 256
+FLOOR_MIN = 0.005
+"""Two white Lambertians closer than this beyond their noise (0.5 %, a tenth of the threshold) make no
+floor: subtracted in quadrature from a 5 % error it would change it by 0.03 points."""
 
 
 def _blocks(img: np.ndarray) -> np.ndarray:
@@ -81,7 +84,7 @@ def _calibration_pair(adapter: Adapter, scenes: tuple[ProbeScene, ProbeScene]) -
 def calibration_floor(one: Adapter, other: Adapter, condition: str, label: str,
                       scenes: tuple[ProbeScene, ProbeScene]) -> Disagreement | None:
     """The two adapters' white Lambertians under one condition (two renders each, at these two scenes'
-    seeds), compared pixel by pixel: a Disagreement when they differ beyond the noise at all."""
+    seeds), compared pixel by pixel: a Disagreement when they differ beyond the noise by `FLOOR_MIN` or more."""
     key = ("calibration", one.name, one.identity(), other.name, other.identity(), scenes[0].cache_key(),
            scenes[1].cache_key())
     if key not in _MEASURED:
@@ -92,7 +95,7 @@ def calibration_floor(one: Adapter, other: Adapter, condition: str, label: str,
                           float(np.hypot(relative_rmse(*a), relative_rmse(*b)) / 2)) if a[0].any() else (0.0, 0.0)
     err, floor = _MEASURED[key]
     far = beyond_noise(err, floor)
-    if far <= 0.0:
+    if far < FLOOR_MIN:
         return None
     return Disagreement(condition=condition, label=label, kind="white Lambertian", error=err, noise_floor=floor,
                         beyond_noise=far)
