@@ -142,7 +142,7 @@ def run_case(reg, adapters, src, target, *, paper=True, variants=True, cache: Pa
 
     if paper:
         fitted("paper", PAPER, scheme="one", starts=1, coarse=0, jacobian_updates=0,
-               linear_starts=False, **OLD_ENGINE)
+               linear_starts=False, fit_scene="one-view", **OLD_ENGINE)  # the paper's probe alone
     for conv in ("identity", "squared") if methods is None or "analytic" in methods else ():
         p = baselines.convert(src.model, src.params, target, conv)
         if p is not None:
