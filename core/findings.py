@@ -477,7 +477,7 @@ class Verdict(Strict):
     def notes(self) -> list[str]:
         """The notes, and what was not checked where something else makes the result unreliable."""
         return [f.message for f in self.findings
-                if f.severity == "note" or (f.severity == "unchecked" and self.status != "unchecked")]
+                if f.severity == "note" or (f.severity == "unchecked" and self.problems)]
 
     @property
     def reason(self) -> str:

@@ -324,7 +324,7 @@ def summary(result: Conversion) -> dict:
                      "resumed": bool(i.done and i.done.resumed), "notes": i.entry.notes,
                      "textured": i.entry.textured})
     return {"target": result.destination.adapter, "model": result.destination.model, "materials": rows,
-            "converted": sum(r["status"] in ("ok", "mismatch", "unreliable", "unchecked") for r in rows),
+            "converted": sum(i.done is not None and i.done.report is not None for i in result.items),
             "failed": sum(r["status"] in ("failed", "unsupported") for r in rows),
             "libraries": [p.name for p in result.libraries], "library_notes": result.library_notes,
             "seconds": result.seconds, "ran_in": result.where}

@@ -197,6 +197,20 @@ def test_a_held_parameter_needs_no_lobe_in_the_short_form(tmp_path):
         load_definition(held)
 
 
+def _white_through(tmp_path, definition: Path, model: str) -> dict:
+    """Mitsuba's white Lambertian (albedo 0.8) remapped to ``model`` of a renderer definition, as a user
+    runs it; its result.json."""
+    import json
+    import subprocess
+
+    (tmp_path / "white.yaml").write_text("adapter: mitsuba\nmodel: diffuse\nparams: {reflectance: 0.8}\n")
+    run = subprocess.run([sys.executable, "-m", "brdfremap.core.cli", "--adapter", str(definition), "--model", model,
+                          "--source", str(tmp_path / "white.yaml"), "--out", str(tmp_path / "out"), "--quiet"],
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr
+    return json.loads((tmp_path / "out" / "result.json").read_text())
+
+
 NODE = Path(__file__).resolve().parents[2] / "examples" / "renderer-node" / "renderer.yaml"
 
 
@@ -204,19 +218,10 @@ NODE = Path(__file__).resolve().parents[2] / "examples" / "renderer-node" / "ren
 def test_a_persistent_renderer_in_javascript_passes_check_and_remaps(tmp_path, mitsuba_adapter):
     """Issue 35: the JSON-lines mode with a renderer that is not Python (examples/renderer-node): every
     check passes, and a white Lambertian comes back as itself."""
-    import json
-    import subprocess
-
     proc = _check(NODE)
     assert proc.returncode == 0 and "all checks pass" in proc.stdout, proc.stdout + proc.stderr
-    (tmp_path / "white.yaml").write_text("adapter: mitsuba\nmodel: diffuse\nparams: {reflectance: 0.8}\n")
-    run = subprocess.run([sys.executable, "-m", "brdfremap.core.cli", "--adapter", str(NODE), "--model", "phong",
-                          "--source", str(tmp_path / "white.yaml"), "--out", str(tmp_path / "out"), "--quiet"],
-                         capture_output=True, text=True, timeout=300)
-    assert run.returncode == 0, run.stderr
-    r = json.loads((tmp_path / "out" / "result.json").read_text())
+    r = _white_through(tmp_path, NODE, "phong")
     assert r["verdict"] == "ok" and abs(r["params"]["diffuse"][0] / 0.8 - 1) < 0.01, r["reason"]
-
 
 POVRAY = Path(__file__).resolve().parents[2] / "examples" / "renderer-povray" / "povray.yaml"
 
@@ -225,19 +230,10 @@ POVRAY = Path(__file__).resolve().parents[2] / "examples" / "renderer-povray" / 
 def test_the_newcomers_povray_definition_passes_check_and_remaps(tmp_path, mitsuba_adapter):
     """Issue 35: POV-Ray 3.7 from Debian, defined from the README alone (half-float EXR, its sample grid
     capped at 9): every check passes, and a white Lambertian comes back as itself, ok."""
-    import json
-    import subprocess
-
     proc = _check(POVRAY)
     assert proc.returncode == 0 and "all checks pass" in proc.stdout and "half float" in proc.stdout, proc.stdout
-    (tmp_path / "white.yaml").write_text("adapter: mitsuba\nmodel: diffuse\nparams: {reflectance: 0.8}\n")
-    run = subprocess.run([sys.executable, "-m", "brdfremap.core.cli", "--adapter", str(POVRAY), "--model", "diffuse",
-                          "--source", str(tmp_path / "white.yaml"), "--out", str(tmp_path / "out"), "--quiet"],
-                         capture_output=True, text=True, timeout=600)
-    assert run.returncode == 0, run.stderr
-    r = json.loads((tmp_path / "out" / "result.json").read_text())
+    r = _white_through(tmp_path, POVRAY, "diffuse")
     assert r["verdict"] == "ok" and abs(r["params"]["reflectance"][0] / 0.8 - 1) < 0.01, r["reason"]
-
 
 def test_remap_check_without_a_calibration_material_says_what_is_missing(tmp_path):
     proc = _check(_definition(tmp_path))
