@@ -1,12 +1,13 @@
 """How far two adapters' white Lambertians differ under each held-out light: the floor a material's
 held-out error is judged beyond (`core.agreement.calibration_floors`).
 
-    python bench/renderer_floor.py [--source mitsuba] [--target cycles] [--spp 16]
+    python bench/renderer_floor.py [--source mitsuba] [--target cycles] [--spp 16] [--metal smooth|rough]
 
 Renders each adapter's calibration material (`Adapter.calibration`) under the held-out conditions of
 the default probe at --spp (the scene's samples; the validation renders 4x that, in two halves, as a
 remap does) and prints, per condition, the two renderers' relative RMSE, their noise floor and what is
-left beyond it. Raise --spp to see a difference the validation's samples cannot."""
+left beyond it; with --metal, their aluminium of that kind (`Adapter.metals`: a metal's floor). Raise
+--spp to see a difference the validation's samples cannot."""
 
 from __future__ import annotations
 
@@ -24,12 +25,14 @@ def main() -> int:
     ap.add_argument("--source", default="mitsuba")
     ap.add_argument("--target", default="cycles")
     ap.add_argument("--spp", type=int, default=16)
+    ap.add_argument("--metal", choices=("smooth", "rough"))
     args = ap.parse_args()
     scene = ProbeScene(spp=args.spp)
     conditions = [(c.name, c.label, (a, b)) for c, a, b in held_out_scenes(scene, False, scene.lights)]
     with open_adapters(registry(), [args.source, args.target]) as pool:
-        floors = calibration_floors(pool[args.source], pool[args.target], conditions)
-    print(f"{args.source} against {args.target}, white Lambertians, validation at {4 * args.spp} spp or more")
+        floors = calibration_floors(pool[args.source], pool[args.target], conditions, args.metal)
+    what = f"{args.metal} aluminium" if args.metal else "white Lambertians"
+    print(f"{args.source} against {args.target}, {what}, validation at {4 * args.spp} spp or more")
     print(f"{'condition':12} {'spp':>5} {'error':>8} {'noise':>8} {'beyond':>8}")
     measured = [v for k, v in _MEASURED.items() if k[0] == "calibration"]
     for (name, _, (a, _b)), (err, noise) in zip(conditions, measured):

@@ -14,12 +14,12 @@ from typing import Any, Iterator, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-Purpose = Literal["fit scene", "source", "tries", "fit", "checks", "joint", "precise", "noise", "validation",
+Purpose = Literal["fit scene", "source", "tries", "fit", "checks", "joint", "inputs", "precise", "noise", "validation",
                   "agreement", "textured", "other"]
 PURPOSES: tuple[str, ...] = Purpose.__args__  # type: ignore[attr-defined]
 """In the order a job runs them: choosing the fit scene (source renders that say whether the job's
 lights resolve it), the source's images, tries of discrete choices, the fit's stages, the Jacobian
-checks at the optimum, joint refinement, the polish at more samples, the target's noise,
+checks at the optimum, joint refinement, the held inputs the source needs, the polish at more samples, the target's noise,
 validation under held-out lights, the renderers' agreement on glasses, the textured check."""
 
 Side = Literal["source", "target"]

@@ -14,7 +14,8 @@ the model's. Measurements are kept for the process: a library's glasses are rend
 Opaque or not, each adapter's white Lambertian (`Adapter.calibration`) is compared the same way
 under each held-out condition: how far the two renderers differ on the simplest material there
 (Cycles and Mitsuba 3.2 % under the rim light, a command-line renderer more) is a floor that a
-material's error there is judged beyond, as it is judged beyond the render noise."""
+material's error there is judged beyond, as it is judged beyond the render noise. A metal's floor
+is measured on the two adapters' aluminium of its kind (`Adapter.metals`) where both declare it."""
 
 from __future__ import annotations
 
@@ -22,7 +23,8 @@ from typing import Callable
 
 import numpy as np
 
-from .engine.results import Agreement, Disagreement
+from .appearance import Appearance
+from .engine.results import WHITE, Agreement, Disagreement
 from .metrics import beyond_noise, relative_rmse
 from .protocol import Adapter, check_image
 from .scene import EnvironmentLight, ProbeScene
@@ -74,21 +76,48 @@ def compare(one: Adapter, other: Adapter, condition: str, label: str, scenes: tu
                         beyond_noise=far)
 
 
-def _calibration_pair(adapter: Adapter, scenes: tuple[ProbeScene, ProbeScene]) -> tuple[np.ndarray, np.ndarray]:
-    model, given = adapter.calibration  # type: ignore[misc]
+SMOOTH_METAL = 0.03
+"""A metal of microfacet α below this is judged against the adapters' smooth aluminium (α 0.01),
+from it on against their rough one (α 0.09): 0.03 lies between the two."""
+
+
+def metal_kind(look: Appearance | None) -> str | None:
+    """Which of `Adapter.metals` a material read as this is judged against: "smooth", "rough", or
+    None (not a metal, or no reading)."""
+    if look is None or look.kind != "conductor":
+        return None
+    return "smooth" if (look.alpha or 0.0) < SMOOTH_METAL else "rough"
+
+
+def reference(adapter: Adapter, metal: str | None) -> tuple[str, dict] | None:
+    """The material an adapter's floor is measured on: its metal of this kind (`Adapter.metals`:
+    "smooth", "rough") for a metal, else (or where it declares none) its white Lambertian."""
+    return adapter.metals.get(metal) if metal in adapter.metals else adapter.calibration
+
+
+def _calibration_pair(adapter: Adapter, metal: str | None,
+                      scenes: tuple[ProbeScene, ProbeScene]) -> tuple[np.ndarray, np.ndarray]:
+    model, given = reference(adapter, metal)  # type: ignore[misc]
     params = adapter.models[model].complete(given)
     return tuple(check_image(adapter.render(model, params, sc), sc, f"adapter {adapter.name!r} calibration material")
                  .astype(np.float64) for sc in scenes)  # type: ignore[return-value]
 
 
+def _kind(one: Adapter, other: Adapter, metal: str | None) -> str | None:
+    """The metal both adapters declare of this kind, or None (their white Lambertians)."""
+    return metal if metal is not None and metal in one.metals and metal in other.metals else None
+
+
 def calibration_floor(one: Adapter, other: Adapter, condition: str, label: str,
-                      scenes: tuple[ProbeScene, ProbeScene]) -> Disagreement | None:
-    """The two adapters' white Lambertians under one condition (two renders each, at these two scenes'
-    seeds), compared pixel by pixel: a Disagreement when they differ beyond the noise by `FLOOR_MIN` or more."""
-    key = ("calibration", one.name, one.identity(), other.name, other.identity(), scenes[0].cache_key(),
+                      scenes: tuple[ProbeScene, ProbeScene], metal: str | None = None) -> Disagreement | None:
+    """The two adapters' white Lambertians (or, for a metal, their metals of its kind where both declare
+    one) under one condition (two renders each, at these two scenes' seeds), compared pixel by pixel: a
+    Disagreement when they differ beyond the noise by `FLOOR_MIN` or more."""
+    metal = _kind(one, other, metal)
+    key = ("calibration", one.name, one.identity(), other.name, other.identity(), metal, scenes[0].cache_key(),
            scenes[1].cache_key())
     if key not in _MEASURED:
-        a, b = _calibration_pair(one, scenes), _calibration_pair(other, scenes)
+        a, b = _calibration_pair(one, metal, scenes), _calibration_pair(other, metal, scenes)
         if len(_MEASURED) >= KEEP:
             _MEASURED.pop(next(iter(_MEASURED)))
         _MEASURED[key] = (relative_rmse((a[0] + a[1]) / 2, (b[0] + b[1]) / 2),
@@ -97,29 +126,32 @@ def calibration_floor(one: Adapter, other: Adapter, condition: str, label: str,
     far = beyond_noise(err, floor)
     if far < FLOOR_MIN:
         return None
-    return Disagreement(condition=condition, label=label, kind="white Lambertian", error=err, noise_floor=floor,
-                        beyond_noise=far)
+    return Disagreement(condition=condition, label=label, kind=WHITE if metal is None else f"{metal} metal",
+                        error=err, noise_floor=floor, beyond_noise=far)
 
 
 def calibration_floors(source: Adapter, target: Adapter,
-                       conditions: list[tuple[str, str, tuple[ProbeScene, ProbeScene]]]) -> dict[str, Disagreement]:
-    """How far the two renderers differ on a white Lambertian under each held-out condition (not the fit
-    scene, whose differences the fit absorbs): measured once a process for each pair and scene. None
-    where an adapter declares no calibration material, or both sides are one renderer."""
+                       conditions: list[tuple[str, str, tuple[ProbeScene, ProbeScene]]],
+                       metal: str | None = None) -> dict[str, Disagreement]:
+    """How far the two renderers differ on a white Lambertian (a metal: on their metals of its kind)
+    under each held-out condition (not the fit scene, whose differences the fit absorbs): measured once
+    a process for each pair, reference and scene. None where an adapter declares no calibration
+    material, or both sides are one renderer."""
     if getattr(source, "unmetered", source) is getattr(target, "unmetered", target) or \
             source.calibration is None or target.calibration is None:
         return {}
-    found = (calibration_floor(source, target, name, label, scenes)
+    found = (calibration_floor(source, target, name, label, scenes, metal)
              for name, label, scenes in conditions if name != "scene")
     return {d.condition: d for d in found if d is not None}
 
 
 def agreement(source: Adapter, target: Adapter, transmissive: bool,
               conditions: list[tuple[str, str, tuple[ProbeScene, ProbeScene]]], threshold: float,
-              judged: Callable[[str], bool] = lambda c: True) -> Agreement:
+              judged: Callable[[str], bool] = lambda c: True, metal: str | None = None) -> Agreement:
     """Whether the two adapters agree under these conditions (name, label, two scenes of other seeds)
-    on a material of this kind; ``judged(name)``: whether the verdict judges that condition."""
-    floors = calibration_floors(source, target, [c for c in conditions if judged(c[0])])
+    on a material of this kind; ``judged(name)``: whether the verdict judges that condition; ``metal``:
+    the kind of metal the source is ("smooth", "rough"), None for anything else."""
+    floors = calibration_floors(source, target, [c for c in conditions if judged(c[0])], metal)
     if not transmissive or getattr(source, "unmetered", source) is getattr(target, "unmetered", target):
         return Agreement(floors=floors)
     lacking = [a.name for a in (source, target) if not {"smooth", "rough"} <= set(a.glasses)]

@@ -12,7 +12,7 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import Field
 
-from .schemas import _Strict
+from .schemas import Need, _Strict
 
 RGB = tuple[float, float, float]
 
@@ -53,6 +53,9 @@ class Appearance(_Strict):
     k: RGB | None = Field(None, description="A conductor's complex IOR, imaginary part, when known.")
     anisotropy: float = Field(0.0, ge=0.0, le=1.0, description="Disney's anisotropy of the specular lobe.")
     rotation: float = Field(0.0, description="Rotation of the anisotropy's tangent, in turns.")
+    diffuse_model: Literal["lambert", "burley", "oren-nayar"] = Field(
+        "lambert", description="The diffuse lobe's shape: Lambert's, Burley's (brighter towards retro-reflection "
+                               "as it roughens) or Oren-Nayar's (flatter).")
     coat: Coat | None = Field(None, description="A clear coat, if one.")
     sheen: Sheen | None = Field(None, description="A sheen, if one.")
     transmission: float = Field(0.0, ge=0.0, le=1.0, description="Fraction of the dielectric lobe transmitted "
@@ -67,6 +70,28 @@ class Appearance(_Strict):
             return self.eta, self.k
         n, kk = eta_k_from_reflectivity(self.specular, [edge_tint] * 3)
         return as_rgb(n), as_rgb(kk)
+
+    def edge_tint(self) -> RGB | None:
+        """A conductor's F82 tint (Hoffman 2019, as Blender's Principled BSDF takes it): its reflectance
+        at 82 degrees over Schlick's from its F0 there, clipped to [0, 1]; None without a complex IOR."""
+        if self.kind != "conductor" or self.eta is None or self.k is None:
+            return None
+        ratio = conductor_fresnel(self.eta, self.k, EDGE_COS) / np.maximum(schlick(self.specular, EDGE_COS), 1e-9)
+        return as_rgb(np.clip(ratio, 0.0, 1.0))
+
+    def needs(self) -> dict[Need, str]:
+        """What this material has that a target's default inputs may not render, each with why."""
+        out: dict[Need, str] = {}
+        if self.kind == "conductor" and self.eta is not None and self.k is not None:
+            true = conductor_fresnel(self.eta, self.k, EDGE_COS)
+            off = float(np.max(np.abs(true - schlick(self.specular, EDGE_COS))))
+            if off > EDGE_MIN:
+                out[Need.EDGE_TINT] = (f"its complex IOR reflects {off:.3f} away from Schlick's at 82 degrees "
+                                       "(an F82 tint)")
+        if self.kind == "dielectric" and max(self.diffuse) > 0.0 and self.diffuse_model != "lambert":
+            need = Need.RETRO_DIFFUSE if self.diffuse_model == "burley" else Need.ROUGH_DIFFUSE
+            out[need] = f"its diffuse lobe is {_DIFFUSE_NAMES[self.diffuse_model]}, not Lambert's"
+        return out
 
     def opaque_base(self) -> RGB:
         """The base colour whose untransmitted part is the diffuse albedo (a Principled BSDF's)."""
@@ -84,6 +109,33 @@ def as_rgb(v: Any) -> RGB:
     """Three floats from a triple or a number (an array, a tuple, a list)."""
     a = np.broadcast_to(np.asarray(v, dtype=float), (3,))
     return (float(a[0]), float(a[1]), float(a[2]))
+
+
+_DIFFUSE_NAMES = {"lambert": "Lambert's", "burley": "Burley's", "oren-nayar": "Oren-Nayar's"}
+EDGE_COS = math.cos(math.radians(82.0))
+"""Where a metal's edge is read: 82 degrees from the normal, where Schlick's error is largest (F82)."""
+EDGE_MIN = 0.01
+"""A complex IOR whose reflectance at 82 degrees is within this of Schlick's needs no edge tint."""
+
+
+def conductor_fresnel(eta: Any, k: Any, cos_i: float) -> np.ndarray:
+    """Unpolarised Fresnel reflectance of a conductor in air at this incidence, per channel."""
+    n, kk = np.asarray(eta, dtype=float), np.asarray(k, dtype=float)
+    c2 = cos_i * cos_i
+    s2 = 1.0 - c2
+    t0 = n * n - kk * kk - s2
+    a2b2 = np.sqrt(t0 * t0 + 4.0 * n * n * kk * kk)
+    a = np.sqrt(np.maximum(0.5 * (a2b2 + t0), 0.0))
+    rs = (a2b2 + c2 - 2.0 * a * cos_i) / (a2b2 + c2 + 2.0 * a * cos_i)
+    t1 = c2 * a2b2 + s2 * s2
+    rp = rs * (t1 - 2.0 * a * cos_i * s2) / (t1 + 2.0 * a * cos_i * s2)
+    return 0.5 * (rs + rp)
+
+
+def schlick(f0: Any, cos_i: float) -> np.ndarray:
+    """Schlick's approximation of the reflectance at this incidence from F0."""
+    f = np.asarray(f0, dtype=float)
+    return f + (1.0 - f) * (1.0 - cos_i) ** 5
 
 
 def dielectric_f0(ior: float) -> float:

@@ -143,7 +143,8 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
                                                    job.settings.resolve_limit) if texturing else []) + \
         ([SmoothHeld(held=smooth)] if smooth else [])
     result = remap(resolved.target_spec, {**resolved.base, **start}, free, renders, job.settings, job.tuning,
-                   progress, alternatives=alternatives(resolved, start, smooth) if informed else [], notes=notes)
+                   progress, alternatives=alternatives(resolved, start, smooth) if informed else [], notes=notes,
+                   needed=needed(resolved, adapters, start) if free and job.settings.inputs == "needed" else {})
     files = artifacts(adapters[tgt.adapter], tgt.model, result.params, renders.source_image(), result.target_image,
                       texturing)
     info = describe(adapters, list(dict.fromkeys((src.adapter, tgt.adapter))))
@@ -262,6 +263,20 @@ def fitted(resolved: Resolved, start: dict[str, Value]) -> list[str]:
     return free + [p.name for p in spec.parameters
                    if p.fit_when_carried and p.name in start and p.name not in resolved.fixed and p.name not in free
                    and spec.is_active(p.name, params) and not spec.is_inert(p.name, params)]
+
+
+def needed(resolved: Resolved, adapters: AdapterPool, start: dict[str, Value]) -> dict[str, str]:
+    """The target's held inputs that the source's reading needs (`Appearance.needs` against
+    `ParamSpec.fit_for`), each with why: those the user did not fix, that mean something and can
+    change the image with the start's values. {} without a reading."""
+    job = resolved.job
+    look = adapters[job.source.adapter].appearance(job.source.model, resolved.source_params)
+    if look is None:
+        return {}
+    has, spec, params = look.needs(), resolved.target_spec, {**resolved.base, **start}
+    return {p.name: f"{n.value} ({has[n]})" for p in spec.parameters for n in p.fit_for
+            if n in has and p.name not in resolved.fixed and spec.is_active(p.name, params)
+            and not spec.is_inert(p.name, params)}
 
 
 def _named(adapter, model: str, look, base: dict[str, Value], p, value: Value) -> bool:

@@ -62,13 +62,15 @@ class HeldOutError(Strict):
     label: str
     error: float
     beyond_noise: float = Field(description="The error beyond the render noise and, where they differ, the "
-                                            "renderers' own difference on a white Lambertian there.")
+                                            "renderers' own difference on a white Lambertian (a metal: on their "
+                                            "metals) there.")
     renderers: float = Field(0.0, description="That difference of the renderers' (beyond their noise); 0: none.")
+    reference: str = Field("white Lambertian", description="What that difference was measured on.")
 
     def words(self) -> str:
         if self.renderers > 0:
             return f"{self.label} {self.error:.1%} ({self.beyond_noise:.1%} beyond the noise and the renderers' " \
-                   f"{self.renderers:.1%} on a white Lambertian)"
+                   f"{self.renderers:.1%} on a {self.reference})"
         return f"{self.label} {self.error:.1%}" + (
             "" if self.beyond_noise >= 0.995 * self.error else f" ({self.beyond_noise:.1%} beyond the noise)")
 
@@ -92,12 +94,14 @@ class RenderersFloor(_Note):
     kind: Literal["renderers_floor"] = "renderers_floor"
     condition: str
     label: str
-    error: float = Field(description="The two renderers' white Lambertians' relative RMSE there.")
+    error: float = Field(description="The two renderers' reference materials' relative RMSE there.")
     beyond_noise: float
     result_error: float = Field(description="The result's own error there.")
+    reference: str = Field("white Lambertian", description="The reference: a white Lambertian, or for a metal the "
+                                                           "adapters' smooth or rough aluminium.")
 
     def sentence(self) -> str:
-        return (f"the renderers disagree by {self.error:.1%} under the {self.label} even on a white Lambertian "
+        return (f"the renderers disagree by {self.error:.1%} under the {self.label} even on a {self.reference} "
                 f"({self.beyond_noise:.1%} beyond the noise): the result's {self.result_error:.1%} there is within "
                 "their difference, not the material's")
 
@@ -426,6 +430,22 @@ class NoisePolished(_Note):
                 f"{self.source_noise:.2%}): polished at {self.spp} spp, {self.before:.3%} -> {self.after:.3%} there")
 
 
+class InputsTried(_Note):
+    """Held inputs of the target fitted for what the source's reading needs (`ParamSpec.fit_for`)."""
+
+    kind: Literal["inputs_tried"] = "inputs_tried"
+    inputs: dict[str, str] = Field(description="Each input tried, and what of the source's it was tried for.")
+    before: float = Field(description="Relative RMSE on the fit scene without them.")
+    after: float = Field(description="Relative RMSE with them.")
+    kept: bool
+
+    def sentence(self) -> str:
+        why = "; ".join(f"{k} for {v}" for k, v in self.inputs.items())
+        if self.kept:
+            return f"fitted {why}: {self.before:.2%} -> {self.after:.2%} on the fit scene"
+        return f"tried {why}: {self.before:.2%} -> {self.after:.2%}, not a tenth better, so held"
+
+
 Finding = Annotated[
     Union[ErrorAboveThreshold, ModelMismatch, TableMismatch, HeldOutAbove, RenderersDisagree, RenderersFloor,
           TransportUnchecked,
@@ -433,7 +453,7 @@ Finding = Annotated[
           NotAtMinimum,
           PinnedOnBound, RendererAlters, ValidationSkipped, NothingFitted, TableLookup, TexturedAbove, TexturedNotes,
           StartKept, ChoiceTried, SmoothHeld, SchemeChosen, DeadParameters,
-          JointRefined, PredictionNotRealised, NoisePolished],
+          JointRefined, PredictionNotRealised, NoisePolished, InputsTried],
     Field(discriminator="kind"),
 ]
 

@@ -14,7 +14,7 @@ import numpy as np
 from .account import purpose
 from .cache import RenderCache, render_key
 from .engine.levels import Level
-from .agreement import agreement
+from .agreement import agreement, metal_kind
 from .engine.results import Agreement, Validation
 from .metrics import relative_rmse
 from .protocol import Adapter, check_image
@@ -208,7 +208,8 @@ class ProbeRenders:
                                                                        self.scene.view_scenes()[0].lights,
                                                                        self.point_resolution())
             if c.name in {k.condition for k in validation.checks}]
-        return agreement(self.source.adapter, self.target.adapter, transmissive, conditions, threshold, judged)
+        metal = metal_kind(self.source.adapter.appearance(self.source.model, self.source_params))
+        return agreement(self.source.adapter, self.target.adapter, transmissive, conditions, threshold, judged, metal)
 
     def notes(self, params: dict[str, Value]) -> list[str]:
         return list(self.target.adapter.notes(self.target.model, params))

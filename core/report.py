@@ -27,7 +27,7 @@ from .renders import rounded
 from .scene import ProbeScene
 from .texturing import Textured
 
-SCHEMA_VERSION = 6
+SCHEMA_VERSION = 7
 """Bump whenever the fields change (an older reader refuses a field it does not know). 4: a job's
 table lookup, a textured source's record; 5: the account of the job's renders; 6: the renderers'
 difference on a white Lambertian in a held-out error (`renderers`) and its note (`renderers_floor`)."""

@@ -37,6 +37,11 @@ class Settings(Strict):
                             "over 3 %, e.g. a highlight smaller than a pixel), more samples (up to 16x), else the "
                             "studio environment; one-view: the same without the back light's view; samples: more "
                             "samples only; as-given: the scene as it is (the paper's probe).")
+    inputs: Literal["needed", "given"] = Field(
+        "needed", description="needed: the target's held inputs that the source's reading needs (a metal's F82 tint "
+                              "for a complex IOR, Diffuse Roughness for a diffuse that is not Lambert's) are tried "
+                              "where the fit without them leaves more than the noise, and kept where they lower "
+                              "its error by a tenth; given: the target's fitted inputs and what the source carries.")
     validation: Literal["held-out", "none"] = Field(
         "held-out", description="held-out: after the fit, render source and target under held-out "
                                                   "lights (grazing, rim, headlight, the studio environment) and "
@@ -56,10 +61,12 @@ class Settings(Strict):
 
     def for_study(self) -> "Settings":
         """These settings for a table's or an experiment's fits: auto fits there on the job's scene
-        alone (one-view), without the back light's view. Their points are compared with the paper's
+        alone (one-view), without the back light's view, and on the target's given inputs (a table's
+        points all vary the same parameters). Their points are compared with the paper's
         figures and with tables built before it, and a table's lookups are judged against what its
         direct fits reached on that scene."""
-        return self.model_copy(update={"fit_scene": "one-view"}) if self.fit_scene == "auto" else self
+        update = {"inputs": "given", **({"fit_scene": "one-view"} if self.fit_scene == "auto" else {})}
+        return self.model_copy(update=update)
 
 
 DEFAULTS = Settings()

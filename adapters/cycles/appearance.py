@@ -33,7 +33,7 @@ def appearance(model: str, p: dict[str, Value]) -> Appearance | None:
         return Appearance(kind="conductor", alpha=alpha, distribution=dist,  # type: ignore[arg-type]
                           specular=conductor_f0(eta, k), eta=eta, k=k)
     if model == "diffuse":
-        return Appearance(kind="dielectric", diffuse=as_rgb(p["color"]))
+        return Appearance(kind="dielectric", diffuse=as_rgb(p["color"]), diffuse_model=_shape(p, "roughness"))
     return None
 
 
@@ -46,7 +46,13 @@ def _principled(p: dict[str, Value], alpha: float, dist) -> Appearance:
     opaque = (1.0 - m) * (1.0 - extra["transmission"])  # what is neither metal nor transmitted is diffuse
     ior = float(p["ior"]) if extra["transmission"] > 0 else ior_from_f0(f0)  # type: ignore[arg-type]
     return Appearance(kind="dielectric", alpha=alpha, distribution=dist, specular=(f0,) * 3,  # type: ignore
-                      diffuse=tuple(c * opaque for c in base), ior=ior, **extra)  # type: ignore
+                      diffuse=tuple(c * opaque for c in base), ior=ior,
+                      diffuse_model=_shape(p, "diffuse_roughness"), **extra)  # type: ignore
+
+
+def _shape(p: dict[str, Value], name: str) -> str:
+    """Cycles' rough diffuse is Oren-Nayar's; none at roughness 0."""
+    return "oren-nayar" if float(p.get(name, 0.0)) > 0.0 else "lambert"  # type: ignore[arg-type]
 
 
 def _layers(p: dict[str, Value]) -> dict:
@@ -99,6 +105,8 @@ def from_appearance(model: str, a: Appearance, base: dict[str, Value]) -> dict[s
         out["distribution"] = a.distribution  # the source's single-scattering lobe, not multi_ggx's extra energy
     if model == "principled":
         out.update(base_color=a.specular if metal else a.opaque_base(), metallic=1.0 if metal else 0.0)
+        if a.edge_tint() is not None:
+            out["specular_tint"] = a.edge_tint()  # a complex IOR's edge, as Blender's F82 tint renders it
         out.update(_layer_params(a))
         if not metal and a.transmission > 0.0:
             out["specular_ior_level"] = 0.5  # a glass's F0 is its IOR's

@@ -4,7 +4,7 @@ Blender's roughness r is the square root of the microfacet α (α = r²)."""
 
 from __future__ import annotations
 
-from brdfremap.core.schemas import LobeSpec, ModelSpec, ParamSpec
+from brdfremap.core.schemas import LobeSpec, ModelSpec, Need, ParamSpec
 
 # Lobes are isolated natively by render passes (Diffuse Direct x Diffuse Color, Glossy
 # Direct x Glossy Color), so no overrides: editing the material to hide a lobe changes the
@@ -50,7 +50,8 @@ PRINCIPLED = ModelSpec(
                                               "a glass's is fitted: it refracts what the glass transmits)."),
         _unit("specular_ior_level", 0.5, upper=1.0, desc="Specular IOR Level (0.5 = the IOR as given; a glass "
               "ignores it).", inert_when=METAL, held_when=GLASS),
-        ParamSpec(name="specular_tint", kind="rgb", default=(1.0, 1.0, 1.0), fit=False, description="Specular Tint."),
+        ParamSpec(name="specular_tint", kind="rgb", default=(1.0, 1.0, 1.0), fit=False, fit_for=(Need.EDGE_TINT,),
+                  description="Specular Tint (a metal's: its F82 tint, the colour of its edge)."),
         _unit("anisotropic", 0.0, fit=False, fit_when_carried=True, desc="Anisotropic (the probe's tangent runs "
               "along the sphere's latitudes, its pole at the image's top)."),
         _unit("anisotropic_rotation", 0.0, fit=False, fit_when_carried=True, inert_when=ISOTROPIC,
@@ -65,7 +66,8 @@ PRINCIPLED = ModelSpec(
         _unit("sheen_roughness", 0.5, fit=False, fit_when_carried=True, desc="Sheen Roughness.", inert_when=NO_SHEEN),
         ParamSpec(name="sheen_tint", kind="rgb", default=(1.0, 1.0, 1.0), fit=False, inert_when=NO_SHEEN,
                   description="Sheen Tint."),
-        _unit("diffuse_roughness", 0.0, fit=False, desc="Diffuse Roughness (0: Lambertian)."),
+        _unit("diffuse_roughness", 0.0, fit=False, fit_for=(Need.ROUGH_DIFFUSE,),
+              desc="Diffuse Roughness (0: Lambertian)."),
         _unit("subsurface_weight", 0.0, fit=False, desc="Subsurface Weight (the probe sphere is 2 units across: "
               "radii well below it look like a softened diffuse)."),
         ParamSpec(name="subsurface_radius", kind="rgb", lower=0.0, upper=100.0, default=(1.0, 0.2, 0.1), fit=False,
@@ -120,7 +122,7 @@ DIFFUSE = ModelSpec(
     description="Diffuse BSDF (Lambertian at roughness 0).",
     parameters=(
         ParamSpec(name="color", kind="rgb", default=(0.8, 0.8, 0.8), linear_in=("full", "diffuse"), description="Color."),
-        _unit("roughness", 0.0, fit=False, desc="Oren-Nayar roughness."),
+        _unit("roughness", 0.0, fit=False, fit_for=(Need.ROUGH_DIFFUSE,), desc="Oren-Nayar roughness."),
     ),
     lobes={"diffuse": LobeSpec(params=("color", "roughness")), "specular": LobeSpec(empty=True)},
     texturable=("color", "roughness"),

@@ -316,6 +316,8 @@ class MitsubaAdapter(Adapter):
     calibration = ("diffuse", {"reflectance": 0.8})
     glasses = {"smooth": ("dielectric", {"int_ior": 1.5}),
                "rough": ("roughdielectric", {"distribution": "ggx", "alpha": 0.1, "int_ior": 1.5})}
+    metals = {kind: ("roughconductor", {"material": "none", "distribution": "ggx", "alpha": a, "eta": (1.66, 0.88, 0.52),
+                                        "k": (9.22, 6.27, 4.84)}) for kind, a in (("smooth", 0.01), ("rough", 0.09))}
     textures = True
     max_scenes = 8
 

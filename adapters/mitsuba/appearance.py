@@ -100,7 +100,8 @@ def _principled(p: dict[str, Value]) -> Appearance:
     f0 = 0.08 * float(p["specular"])  # type: ignore[arg-type]
     opaque = (1.0 - m) * (1.0 - extra["transmission"])
     return Appearance(kind="dielectric", alpha=alpha, distribution="ggx", specular=(f0,) * 3,
-                      diffuse=tuple(c * opaque for c in base), ior=ior_from_f0(f0), **extra)  # type: ignore
+                      diffuse=tuple(c * opaque for c in base), ior=ior_from_f0(f0), diffuse_model="burley",
+                      **extra)  # type: ignore
 
 
 def _hue(c) -> tuple[float, float, float]:

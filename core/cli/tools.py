@@ -33,6 +33,9 @@ def _parameter(p, spec=None) -> str:
         return f"{p.name} ({' | '.join(map(str, p.choices))}; default {p.default})"
     scale = ", log" if p.scale == "log" else ""
     held = (", held unless the source has it" if p.fit_when_carried else ", held") if not p.fit else ""
+    if p.fit_for:
+        held += f"; tried where the source needs {' or '.join(n.value for n in p.fit_for)} and the fit leaves more " \
+                "than the noise"
     image = ", an image too" if spec is not None and p.name in spec.texturable else ""
     return f"{p.name} ({p.kind} [{p.lower:g}, {p.upper:g}]{scale}{held}{image}; default {format_value(p.default)})"
 

@@ -60,6 +60,10 @@ class Check(Strict):
                                            "a held-out light.")
 
 
+WHITE = "white Lambertian"
+"""The reference material a renderer pair's floor is measured on, but for a metal."""
+
+
 class Disagreement(Strict):
     """Two renderers drawing one kind of material otherwise under one condition: their reference
     materials (clear glasses) differ there beyond the noise, by more than the threshold."""

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..account import purpose
 from ..errors import OptimisationError
-from ..findings import ChoiceTried, JointRefined, NoisePolished, PredictionNotRealised, StartKept
+from ..findings import ChoiceTried, InputsTried, JointRefined, NoisePolished, PredictionNotRealised, StartKept
 from ..metrics import delta_e_itp, l2, relative_rmse
 from ..schemas import ModelSpec, Value
 from ..settings import Settings
@@ -102,11 +102,12 @@ class _State:
 def remap(target: ModelSpec, base: dict[str, Value], free: list[str], renders: Renders,
           settings: Settings = Settings(), tuning: Tuning = Tuning(),
           progress: ProgressFn | None = None, alternatives: list[dict[str, Value]] = (),
-          notes: list = ()) -> EngineResult:
+          notes: list = (), needed: dict[str, str] | None = None) -> EngineResult:
     """Fit ``free`` parameters of ``target`` (the others as in ``base``) so that the target's render
     matches the source's, both as ``renders`` gives them at its scene. ``alternatives``: values of
     discrete choices to try first (each fitted briefly, the best kept). ``notes``: findings the
-    caller adds to the verdict (where the parameters came from)."""
+    caller adds to the verdict (where the parameters came from). ``needed``: held parameters to try
+    as well where the fit leaves more than the noise, each with what of the source's needs it."""
     t0 = time.perf_counter()
     with purpose("source"):
         run = _setup(target, free, renders, settings, tuning, progress)
@@ -123,6 +124,8 @@ def remap(target: ModelSpec, base: dict[str, Value], free: list[str], renders: R
         assessment = run.assess(state)
     with purpose("joint"):
         state, assessment, joint = _refine_jointly(run, plan, state, assessment)
+    with purpose("inputs"):
+        state, assessment = _fit_needed(run, state, assessment, needed or {})
     with purpose("precise"):
         state, assessment = _polish_noise_limited(run, state, assessment, start.err)
     return _conclude(run, plan, state, assessment, joint, t0, start.err)
@@ -296,6 +299,41 @@ def _refine_jointly(run: _Run, plan: Plan, state: _State, assessment: Assessment
     if rounds and state.err < err0:
         run.notes.append(JointRefined(before=err0, after=state.err, rounds=rounds))
     return state, assessment, _Joint(rounds, err0, state.err, predicted0 or 0.0)
+
+
+INPUT_GAIN = 0.1
+"""A held input tried for what the source needs is kept where it lowers the fit's error by this
+fraction: less is within what another start or the noise would change."""
+INPUT_MIN = 0.01
+"""Nor tried where the fit ends within this error (noiseless renders have no noise to measure by)."""
+
+
+def _fit_needed(run: _Run, state: _State, assessment: Assessment, needed: dict[str, str]
+                ) -> tuple[_State, Assessment]:
+    """The held inputs the source needs (`ParamSpec.fit_for`: Principled's Specular Tint for a
+    complex IOR's edge), tried where the fit without them ended beyond `Tuning.precise_below` times
+    the source's noise and `INPUT_MIN`: every free parameter and these, polished from the fit at the fine level with
+    twice a polish's renders, kept where the scene-level error falls by `INPUT_GAIN`. Tried after the
+    fit, not in it: a fit given every input the reading proposes spends renders on columns that
+    change nothing where the models already agree (a material at its noise floor never gets here)."""
+    tried = {k: v for k, v in needed.items() if k not in run.free}
+    if not tried or not run.free or state.err <= max(run.tuning.precise_below * run.source_noise, INPUT_MIN):
+        return state, assessment
+    free = run.free + list(tried)
+    space = ParamSpace(run.target, state.params, free)
+    config = run.polish(f"inputs {', '.join(tried)}{run.fine_suffix}", None, 2 * run.polish_budget(space),
+                        origin="the fit")
+    stage = run.stage(config, space, run.fine, None)
+    params = space.decode(stage.run(space.encode(state.params)))
+    image, err = run.render_final(params) if stage.result.error < stage.result.start_error else (None, state.err)
+    kept = image is not None and err <= (1.0 - INPUT_GAIN) * state.err
+    run.stages.append(stage.result.model_copy(update={"kept": kept}))
+    run.notes.append(InputsTried(inputs=tried, before=state.err, after=err, kept=kept))
+    if not kept:
+        return state, assessment
+    run.free = free
+    state = _State(params, image, err, stage)
+    return state, run.assess(state)
 
 
 PRECISE_SLACK = 0.05

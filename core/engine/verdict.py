@@ -30,7 +30,7 @@ from ..findings import (
 )
 from ..metrics import beyond_noise, clipped_at, eight_bit
 from .assess import Assessment
-from .results import Agreement, StageResult, Validation
+from .results import WHITE, Agreement, StageResult, Validation
 
 GAIN_BEYOND_NOISE = 0.5
 """A joint step's predicted gain beyond the noise, as a fraction of the threshold, that says a result
@@ -102,10 +102,10 @@ def _errors(ev: Evidence) -> list:
             far = beyond_noise(c.beyond_noise, pair)
             if far > ev.threshold or floor is None:
                 above.append(HeldOutError(condition=c.condition, label=c.label, error=c.error, beyond_noise=far,
-                                          renderers=pair))
+                                          renderers=pair, reference=floor.kind if floor is not None else WHITE))
             else:
                 out.append(RenderersFloor(condition=c.condition, label=c.label, error=floor.error,
-                                          beyond_noise=pair, result_error=c.error))
+                                          beyond_noise=pair, result_error=c.error, reference=floor.kind))
     if above:
         out.append(HeldOutAbove(conditions=above, threshold=ev.threshold))
     return out

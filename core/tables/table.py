@@ -141,6 +141,8 @@ class Table(WithDerived):
         for ax in doc["spec"]["axes"].values():  # nor 4 listed values
             if ax["values"] is None:
                 del ax["values"]
+        if doc["spec"]["options"].get("inputs") == "needed":  # nor 5 the held inputs a source needs
+            del doc["spec"]["options"]["inputs"]
         for c in doc["candidates"].values():
             if c["correction"] is None:
                 del c["correction"], c["correction_cv"]

@@ -39,7 +39,9 @@ def test_mitsuba_gold_reads_as_a_conductor_and_writes_principled_by_the_exporter
     assert look.kind == "conductor" and look.alpha == 0.1 and look.distribution == "beckmann"
     assert look.specular == pytest.approx(conductor_f0(*GOLD))
     out = cycles.from_appearance("principled", look, CYCLES["principled"].complete({}))
-    assert out == {"roughness": pytest.approx(math.sqrt(0.1)), "base_color": look.specular, "metallic": 1.0}
+    # Its edge too: Principled's Specular Tint is a metal's F82 tint, which a complex IOR gives.
+    assert out == {"roughness": pytest.approx(math.sqrt(0.1)), "base_color": look.specular, "metallic": 1.0,
+                   "specular_tint": look.edge_tint()}
     # Cycles' own conductor takes the complex IOR itself, and the source's Beckmann (Principled has none:
     # the fit tries its two GGX kinds, see test_an_open_distribution_is_tried_each_way).
     assert cycles.from_appearance("metallic", look, {}) == {"roughness": pytest.approx(math.sqrt(0.1)),
@@ -152,3 +154,28 @@ def test_a_noise_limited_fit_is_polished_at_more_samples():
     assert out[4].metrics.relative_rmse <= out[4].metrics.threshold and out[4].verdict == "ok"
     off = {f: abs(out[f].params["alpha"] / truth["alpha"] - 1) for f in out}
     assert off[4] < off[1]
+
+
+def test_a_complex_ior_needs_an_edge_tint_where_schlick_misses_its_edge():
+    from brdfremap.core.appearance import EDGE_COS, conductor_fresnel, schlick
+    from brdfremap.core.schemas import Need
+
+    eta, k = (1.66, 0.88, 0.52), (9.22, 6.27, 4.84)  # aluminium: its edge dips below Schlick's
+    al = Appearance(kind="conductor", alpha=0.09, specular=conductor_f0(eta, k), eta=eta, k=k)
+    assert conductor_fresnel(eta, k, 1.0) == pytest.approx(al.specular)
+    assert Need.EDGE_TINT in al.needs()
+    assert al.edge_tint() == pytest.approx((0.881, 0.910, 0.942), abs=2e-3)
+    assert conductor_fresnel(eta, k, EDGE_COS) == pytest.approx(schlick(al.specular, EDGE_COS) * al.edge_tint())
+    # Read as F0 alone (no complex IOR) a metal needs nothing: Schlick is its model.
+    assert not Appearance(kind="conductor", alpha=0.09, specular=al.specular).needs()
+
+
+def test_a_burley_diffuse_needs_what_no_shipped_input_renders():
+    from brdfremap.adapters.cycles.models import MODELS
+    from brdfremap.core.schemas import Need
+
+    banana = Appearance(kind="dielectric", alpha=0.25, specular=(0.04,) * 3, diffuse=(0.66, 0.52, 0.12),
+                        diffuse_model="burley")
+    assert set(banana.needs()) == {Need.RETRO_DIFFUSE}
+    assert not [p for m in MODELS.values() for p in m.parameters if Need.RETRO_DIFFUSE in p.fit_for]
+    assert set(banana.model_copy(update={"diffuse_model": "oren-nayar"}).needs()) == {Need.ROUGH_DIFFUSE}

@@ -361,3 +361,23 @@ def test_a_start_on_a_bound_is_moved_inside_it():
     assert out[0.0].relative_rmse > 0.5
     assert out[0.05].relative_rmse < 1e-4
     assert abs(out[0.05].params["alpha"] / 0.15 - 1) < 1e-3
+
+
+def test_a_needed_input_is_fitted_where_the_fit_leaves_more_than_the_noise():
+    # The diffuse lobe held at 0 leaves a model mismatch; the source "needs" it: tried, kept, and said why.
+    renders, _ = _renders()
+    res = remap(TOY, TOY.complete({"diffuse": 0.0}), ["specular", "alpha"], renders, ONE,
+                needed={"diffuse": "a diffuse base"})
+    tried = [f for f in res.verdict.findings if f.kind == "inputs_tried"]
+    assert len(tried) == 1 and tried[0].kept and tried[0].after < 0.5 * tried[0].before
+    assert "diffuse" in res.fitted and res.relative_rmse < 0.01
+    assert "fitted diffuse for a diffuse base" in tried[0].sentence()
+    assert np.allclose(res.params["diffuse"], (0.6, 0.3, 0.1), atol=0.02)
+
+
+def test_a_needed_input_is_not_tried_where_the_fit_is_at_the_noise():
+    base = TOY.complete({})
+    renders, adapter = _renders()
+    res = remap(TOY, base, ["diffuse", "specular", "alpha"], renders, ONE, needed={"unused": "nothing"})
+    assert not [f for f in res.verdict.findings if f.kind == "inputs_tried"]
+    assert "unused" not in res.fitted

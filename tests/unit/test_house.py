@@ -97,7 +97,8 @@ def test_the_report_reads_back_and_other_versions_are_clear_errors(tmp_path):
     with pytest.raises(ConfigError, match="bad.json: cannot read it as JSON"):
         read_report(bad)
     # A result of format 5 or before (an unresolved light a note of an ok, no `unchecked`) is run again.
-    with pytest.raises(ConfigError, match=r"older brdf-remap \(report schema 5; this one reads 6\): run the job again"):
+    with pytest.raises(ConfigError, match=rf"older brdf-remap \(report schema 5; this one reads {SCHEMA_VERSION}\): "
+                                          "run the job again"):
         parse_report({**doc, "schema_version": 5}, "r.json")
 
 

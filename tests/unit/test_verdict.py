@@ -230,3 +230,36 @@ def test_a_joint_step_is_judged_beyond_the_noise():
     assert v.status == "unreliable" and "not at a minimum" in v.reason
     v = _judge(0.20, 0.08, predicted=0.13)  # noisy, and 18.3 % -> 10.2 % beyond it: a real gain
     assert v.status == "unreliable" and "not at a minimum" in v.reason
+
+
+def test_a_metal_is_judged_beyond_the_renderers_metals_not_their_white_lambertians():
+    from brdfremap.core.agreement import _MEASURED, calibration_floors, metal_kind
+    from brdfremap.core.appearance import Appearance
+    from brdfremap.core.scene import ProbeScene
+    from brdfremap.core.validation import held_out_scenes
+    from brdfremap_example.adapter import ToyAdapter
+
+    class Toy(ToyAdapter):
+        metals = {"rough": ("toy", {"diffuse": 0.0, "specular": 0.9, "alpha": 0.3})}
+
+    class Brighter(Toy):
+        """Draws its metal 10 % brighter than the other, its white Lambertian alike."""
+        name = "brighter"
+
+        def render(self, model, params, scene, lobe=None):
+            img = super().render(model, params, scene, lobe)
+            return img * 1.1 if params["diffuse"] == (0.0, 0.0, 0.0) else img
+
+    scene = ProbeScene(resolution=32)
+    conditions = [(c.name, c.label, (a, b)) for c, a, b in held_out_scenes(scene, False, scene.lights)
+                  if c.name == "headlight"]
+    _MEASURED.clear()
+    assert not calibration_floors(Toy(), Brighter(), conditions)  # their white Lambertians agree
+    metal = metal_kind(Appearance(kind="conductor", alpha=0.2, specular=(0.9,) * 3))
+    floor = calibration_floors(Toy(), Brighter(), conditions, metal)["headlight"]
+    assert metal == "rough" and floor.kind == "rough metal" and floor.error == pytest.approx(0.1, rel=0.05)
+    assert metal_kind(Appearance(kind="conductor", alpha=0.01, specular=(0.9,) * 3)) == "smooth"
+    assert metal_kind(Appearance(kind="dielectric", diffuse=(0.5,) * 3)) is None
+    # A kind of metal one adapter does not declare falls back to the white Lambertians.
+    assert not calibration_floors(Toy(), Brighter(), conditions, "smooth")
+    _MEASURED.clear()
