@@ -10,6 +10,10 @@ from brdfremap.core.configio import load_yaml_model
 from brdfremap.core.schemas import LobeSpec, ModelSpec, ParamSpec
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+FORMAT = 2
+"""The definition format this version writes and reads strictly. 1 (a definition without `format:`)
+gave a fitted parameter that neither short-form lobe switches off to the specular stage; 2 asks for
+the long form there (the first new user's model reached 57.8 % that way)."""
 PLACEHOLDERS = ("scene_json", "params_json", "output", "model", "width", "height", "spp", "spp_sqrt", "spp_log2",
                 "seed", "scene_file", "python", "here", "defines")
 
@@ -64,6 +68,10 @@ class RendererDef(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     name: str = Field(description="Adapter name shown by `remap adapters`.")
+    format: int = Field(1, ge=1, description=f"The definition format it was written for: {FORMAT} (this version's; "
+                                              "write it in a new definition), or 1 (the first; a definition "
+                                              "without it): read as it was meant, with a note where the current "
+                                              "form differs.")
     description: str = ""
     command: list[str] = Field(min_length=1, description="argv; placeholders are substituted per argument.")
     mode: Literal["oneshot", "persistent"] = Field("oneshot", description="persistent: JSON lines on stdin/stdout.")
@@ -120,6 +128,14 @@ class RendererDef(BaseModel):
                     raise ValueError(f"unknown placeholder {{{name}}} in {item!r}: a define knows {{key}} and {{value}}")
         return items
 
+    @field_validator("format")
+    @classmethod
+    def _format(cls, v: int) -> int:
+        if v > FORMAT:
+            raise ValueError(f"written for a newer brdf-remap (definition format {v}; this one reads 1 to {FORMAT}): "
+                             f"upgrade brdf-remap, or write it in format {FORMAT}")
+        return v
+
     @model_validator(mode="after")
     def _modes(self) -> "RendererDef":
         if self.calibration is not None and self.calibration.model not in self.models:
@@ -135,17 +151,24 @@ class RendererDef(BaseModel):
                              "beside this one) too")
         return self
 
+    def format_notes(self) -> list[str]:
+        """What a definition of an older format says that the current format says otherwise: each a
+        line naming the model and what to write instead ([] for a current one)."""
+        if self.format >= FORMAT:
+            return []
+        return [f"{msg}; read as format 1 gave them to the specular stage, as it is read now (add `format: "
+                f"{FORMAT}` once changed)" for msg in map(_ambiguous, self.models, self.models.values()) if msg]
+
     def model_specs(self) -> dict[str, ModelSpec]:
         specs = {}
         for name, m in self.models.items():
             numeric = [p.name for p in m.parameters if p.kind != "choice"]
             lobes: dict[str, LobeSpec] = {}
             raw = {k: v for k, v in m.lobes.items()}
-            short = {k: v for k, v in raw.items() if isinstance(v, dict) and "overrides" not in v and "params" not in v}
-            # Held parameters (fit: false) are set, never fitted: no stage needs them, so no lobe.
-            _refuse_ambiguous(name, [p.name for p in m.parameters if p.kind != "choice" and (p.fit or p.fit_when
-                                                                                            or p.fit_when_carried)],
-                              short)
+            short = _short(m)
+            ambiguous = _ambiguous(name, m)
+            if ambiguous and self.format >= FORMAT:
+                raise ValueError(ambiguous)
             for lobe, v in raw.items():
                 if v == "empty":
                     lobes[lobe] = LobeSpec(empty=True)
@@ -163,17 +186,25 @@ class RendererDef(BaseModel):
         return specs
 
 
-def _refuse_ambiguous(model: str, numeric: list[str], short: dict[str, dict]) -> None:
+def _short(m: ModelDef) -> dict[str, dict]:
+    """The lobes given in the short form ({specular: 0}), by lobe."""
+    return {k: v for k, v in m.lobes.items() if isinstance(v, dict) and "overrides" not in v and "params" not in v}
+
+
+def _ambiguous(model: str, m: ModelDef) -> str | None:
     """Both lobes in the short form, and fitted parameters neither switches off: the short form would
     give them all to the specular stage, a colour both lobes share included (the first new user's model
-    reached 57.8 % that way). The long form says which lobe each belongs to. ``numeric``: the fitted
-    numeric parameters (a held one belongs to no stage, and the form it is in cannot harm a fit)."""
+    reached 57.8 % that way). The long form says which lobe each belongs to. Held parameters (fit:
+    false) are set, never fitted: no stage needs them, so no lobe. None where nothing is left over."""
+    short = _short(m)
     if set(short) != {"diffuse", "specular"}:
-        return
+        return None
+    numeric = [p.name for p in m.parameters if p.kind != "choice" and (p.fit or p.fit_when or p.fit_when_carried
+                                                                       or p.fit_for)]
     left = [p for p in numeric if p not in short["diffuse"] and p not in short["specular"]]
     if not left:
-        return
-    raise ValueError(
+        return None
+    return (
         f"{model}.lobes: the short form leaves {', '.join(left)} to neither lobe; write the long form and put each "
         f"in the params of the lobe whose stage should fit it, or in neither when both lobes share it (a colour), "
         f"e.g. diffuse: {{overrides: {_flow(short['diffuse'])}, params: [{', '.join(short['specular'])}]}}, "
@@ -198,4 +229,20 @@ def load_definition(path: str | Path) -> RendererDef:
 
         msg = validation_message(exc)[1] if isinstance(exc, ValidationError) else str(exc).splitlines()[0]
         raise ConfigError(msg, file=str(path), field="models") from None
+    _say_once(Path(path), definition.format_notes())
     return definition
+
+
+_SAID: set[str] = set()
+
+
+def _say_once(path: Path, notes: list[str]) -> None:
+    """An older definition's notes, once a process for each file."""
+    import sys
+
+    key = str(path.resolve())
+    if key in _SAID:
+        return
+    _SAID.add(key)
+    for n in notes:
+        print(f"note: {path}: format 1: {n}", file=sys.stderr)

@@ -28,13 +28,13 @@ material {{
 
 
 def _definition(tmp_path, *, template=TEMPLATE, material="albedo = {p_albedo}", extra_args=(), output="exr",
-                lobes="{diffuse: {}, specular: empty}", params=None) -> Path:
+                lobes="{diffuse: {}, specular: empty}", params=None, fmt: int | None = 2) -> Path:
     (tmp_path / "scene.brace").write_text(template)
     args = ", ".join(f'"{a}"' for a in ["{python}", str(DATA / "brace_renderer.py"), "{scene_json}", "{scene_file}",
                                          "{output}", *extra_args])
     params = params or "[{name: albedo, kind: rgb, default: [0.5, 0.5, 0.5]}]"
     path = tmp_path / "brace.yaml"
-    path.write_text(f"name: brace\ncommand: [{args}]\nscene_template: scene.brace\noutput_format: {output}\n"
+    path.write_text(("" if fmt is None else f"format: {fmt}\n") + f"name: brace\ncommand: [{args}]\nscene_template: scene.brace\noutput_format: {output}\n"
                     f"rgb_format: '{{r}} {{g}} {{b}}'\ntimeout: 30\n"
                     f"models:\n  lambert:\n    parameters: {params}\n    lobes: {lobes}\n"
                     f"    template_vars:\n      material: '{material}'\n")
@@ -123,6 +123,29 @@ def test_an_ambiguous_short_lobe_form_is_refused_showing_the_long_form(tmp_path)
     msg = str(exc.value)
     assert "brace.yaml" in msg and "leaves color to neither lobe" in msg and "or in neither when both lobes share" in msg
     assert "diffuse: {overrides: {specular: 0}, params: [diffuse]}" in msg, msg
+
+
+def test_a_definition_of_the_first_format_is_read_as_it_was_meant_with_a_note(tmp_path, capsys):
+    """Issue 35: a definition the previous version accepted (no `format:`, an ambiguous short lobe
+    form) is read as that version read it (what neither lobe switches off: the specular stage's) and
+    says once what the current form is; one from a newer version is refused naming both formats."""
+    from brdfremap.adapters.subprocess import definition
+
+    params = ("[{name: color, kind: rgb, default: [0.5, 0.5, 0.5]}, {name: diffuse, kind: scalar, default: 1}, "
+              "{name: specular, kind: scalar, default: 0.5}]")
+    lobes = "{diffuse: {specular: 0}, specular: {diffuse: 0}}"
+    path = _definition(tmp_path, params=params, material="albedo = {p_color}", lobes=lobes, fmt=None)
+    definition._SAID.clear()
+    spec = adapter_class(path).models["lambert"]
+    adapter_class(path)
+    assert spec.lobes["specular"].params == ("specular", "color") and spec.lobes["diffuse"].params == ("diffuse",)
+    err = capsys.readouterr().err
+    assert err.count("note:") == 1 and "brace.yaml: format 1: lambert.lobes: the short form leaves color" in err
+    assert "add `format: 2` once changed" in err, err
+    newer = _definition(tmp_path, fmt=3)
+    with pytest.raises(ConfigError, match=r"brace.yaml.*newer brdf-remap \(definition format 3; this one reads 1 "
+                                          r"to 2\)"):
+        adapter_class(newer)
 
 
 def test_the_command_line_has_escapes_too(tmp_path):
