@@ -86,8 +86,7 @@ class Appearance(_Strict):
             true = conductor_fresnel(self.eta, self.k, EDGE_COS)
             off = float(np.max(np.abs(true - schlick(self.specular, EDGE_COS))))
             if off > EDGE_MIN:
-                out[Need.EDGE_TINT] = (f"its complex IOR reflects {off:.3f} away from Schlick's at 82 degrees "
-                                       "(an F82 tint)")
+                out[Need.EDGE_TINT] = f"its complex IOR reflects {off:.3f} away from Schlick's at 82 degrees"
         if self.kind == "dielectric" and max(self.diffuse) > 0.0 and self.diffuse_model != "lambert":
             need = Need.RETRO_DIFFUSE if self.diffuse_model == "burley" else Need.ROUGH_DIFFUSE
             out[need] = f"its diffuse lobe is {_DIFFUSE_NAMES[self.diffuse_model]}, not Lambert's"
