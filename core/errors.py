@@ -4,7 +4,14 @@ from __future__ import annotations
 
 
 class RemapError(Exception):
-    """Base class: everything the tool reports to the user instead of a traceback."""
+    """Base class: everything the tool reports to the user instead of a traceback. Keeps its parts:
+    ``message`` (what happened) and ``where`` (what it happened to: a file and field, a renderer),
+    shown as "where: message"."""
+
+    def __init__(self, message: str, *, where: str | None = None):
+        self.message = message
+        self.where = where
+        super().__init__(f"{where}: {message}" if where else message)
 
 
 class ConfigError(RemapError):
@@ -13,8 +20,7 @@ class ConfigError(RemapError):
     def __init__(self, message: str, *, file: str | None = None, field: str | None = None):
         self.file = file
         self.field = field
-        where = ": ".join(part for part in (file, field) if part)
-        super().__init__(f"{where}: {message}" if where else message)
+        super().__init__(message, where=": ".join(part for part in (file, field) if part) or None)
 
 
 class AdapterUnavailableError(RemapError):

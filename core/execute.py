@@ -204,7 +204,7 @@ def artifacts(adapter: Adapter, model: str, params: dict[str, Value], source: np
                 paths += _textured_files(d, adapter, model, texturing)
             return {p.name: p.read_bytes() for p in paths}
     except (OSError, RemapError) as exc:
-        reason = why(exc) if isinstance(exc, OSError) else str(exc).split(": ", 1)[-1]
+        reason = why(exc) if isinstance(exc, OSError) else exc.message
         raise RenderError(f"cannot make the result's files in the temporary folder {tempfile.gettempdir()}: "
                           f"{reason} (set TMPDIR to a folder with space)") from None
 

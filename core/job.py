@@ -101,6 +101,16 @@ class Where:
     target_file: str | None = None
     target_prefix: str = "--"
     fix_prefix: str = "--fix"
+    command_line: bool = True
+    """Whether the target's fields are flags (`--fix alpha`) or a file's keys (`target.fix.alpha`)."""
+
+    def fix_field(self, name: str) -> str:
+        """A held parameter's field as the user wrote it."""
+        return f"{self.fix_prefix}{' ' if self.command_line else '.'}{name}"
+
+    def field(self, flag: str, key: str) -> str:
+        """A setting's field: its flag on the command line, its key in a file."""
+        return flag if self.command_line else key
 
 
 @dataclass(frozen=True)
@@ -179,17 +189,16 @@ def resolve(job: Job, registry: AdapterRegistry, where: Where = Where()) -> Reso
 
 def _check_fixed(spec: ModelSpec, base: dict[str, Value], fixed: dict[str, Value], where: Where) -> None:
     """A value held for a parameter the model's choices switch off would silently do nothing."""
-    sep = " " if where.fix_prefix.startswith("--") else "."
     for name in fixed:
         if spec.is_inert(name, base):
             cond = ", ".join(f"{k}={base[k]:g}" for k in spec.param(name).inert_when)
-            raise ConfigError(f"does nothing with {cond}", file=where.target_file, field=f"{where.fix_prefix}{sep}{name}")
+            raise ConfigError(f"does nothing with {cond}", file=where.target_file, field=where.fix_field(name))
         if spec.is_active(name, base):
             continue
         cond = " and ".join(f"{k} is {' or '.join(v)}" for k, v in spec.param(name).active_when.items())
         now = ", ".join(f"{k}={base[k]}" for k in spec.param(name).active_when)
         raise ConfigError(f"does nothing with {now}: it is used only when {cond}", file=where.target_file,
-                          field=f"{where.fix_prefix}{sep}{name}")
+                          field=where.fix_field(name))
 
 
 def _check_scene(registry: AdapterRegistry, job: Job, where: Where) -> None:
@@ -199,7 +208,7 @@ def _check_scene(registry: AdapterRegistry, job: Job, where: Where) -> None:
         if problem:
             raise ConfigError(f"adapter {name!r} cannot render the scene {job.scene.name!r}: it {problem}: use a "
                               "scene it can render",
-                              field="--scene" if where.target_prefix.startswith("--") else "scene")
+                              field=where.field("--scene", "scene"))
 
 
 def _check_sampling(job: Job, where: Where) -> None:
@@ -207,7 +216,7 @@ def _check_sampling(job: Job, where: Where) -> None:
     if spp * k > MAX_SPP:
         raise ConfigError(f"{spp} spp x {k} is {spp * k} samples per pixel for the noise-limited polish, over the "
                           f"{MAX_SPP} renderers take: lower it (1: no such polish)",
-                          field="--precise-spp" if where.target_prefix.startswith("--") else "options.precise_spp")
+                          field=where.field("--precise-spp", "options.precise_spp"))
 
 
 def _plain(params: dict[str, Value]) -> dict[str, Any]:

@@ -204,26 +204,3 @@ def _conflict(registry: AdapterRegistry, new: AdapterEntry) -> None:
         registry.conflicts[name] = (f"adapter {name!r} is registered twice: by {who}; uninstall or rename one of "
                                     "them (a renderer definition's `name:`)")
     registry.broken[f"adapter {name!r}"] = registry.conflicts[name]
-
-
-def collect_schemas(pm: PluginManager | None = None) -> dict[str, Any]:
-    """File formats by name: the core's own and those plugins register (`remap schema NAME`)."""
-    from .experiments.spec import Experiment
-    from .job import Job
-    from .report import Report
-    from .scene import ProbeScene
-    from .schemas import Material
-    from .settings import Settings
-    from .tables import Table, TableSpec
-
-    out: dict[str, Any] = {"report": Report, "material": Material, "scene": ProbeScene, "experiment": Experiment,
-                           "job": Job, "settings": Settings, "table": Table, "table-spec": TableSpec}
-    pm = pm or get_plugin_manager()
-
-    def register(name: str, model: Any) -> None:
-        if name in out:
-            raise ConfigError(f"file format {name!r} is registered twice")
-        out[name] = model
-
-    pm.hook.brdfremap_register_schemas(register=register)
-    return out

@@ -73,7 +73,7 @@ class JsonLinesWorker:
                 self.argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                 bufsize=1, env=self.env, cwd=self.cwd, start_new_session=True, preexec_fn=die_with_parent)
         except OSError as exc:
-            raise RenderError(f"{self.name}: cannot start {self.argv[0]!r}: {exc}") from exc
+            raise RenderError(f"cannot start {self.argv[0]!r}: {exc}", where=self.name) from exc
         threading.Thread(target=self._pump_answers, args=(self.proc.stdout, self._lines), daemon=True).start()
         self._stderr_pump = threading.Thread(target=self._pump_stderr, args=(self.proc.stderr, self._stderr),
                                              daemon=True)
@@ -82,7 +82,7 @@ class JsonLinesWorker:
         if not self.hello.get("ok"):
             err = self.hello.get("error", "no greeting")
             self.close()
-            raise RenderError(f"{self.name}: worker failed to start: {err}{self._tail()}")
+            raise RenderError(f"worker failed to start: {err}{self._tail()}", where=self.name)
         return self.hello
 
     @staticmethod
@@ -141,7 +141,8 @@ class JsonLinesWorker:
             if left <= 0:
                 if self.proc is not None:
                     self._kill(self.proc)
-                raise RenderError(f"{self.name}: no answer to {what} within {timeout:.0f} s (worker killed){self._tail()}")
+                raise RenderError(f"no answer to {what} within {timeout:.0f} s (worker killed){self._tail()}",
+                                  where=self.name)
             try:
                 line = self._lines.get(timeout=min(left, 0.5))
             except queue.Empty:
@@ -150,15 +151,14 @@ class JsonLinesWorker:
                 code = self.proc.wait() if self.proc else None
                 # The process is gone; let its last stderr lines arrive before quoting them.
                 self._stderr_pump.join(timeout=2.0)
-                raise _WorkerDied(f"{self.name}: worker exited (code {code}) during {what}{self._tail()}")
+                raise _WorkerDied(f"worker exited (code {code}) during {what}{self._tail()}", where=self.name)
             line = line.strip()
-            if not line.startswith("{"):
-                self._stderr.append(line)  # stray output: keep it for the error message
-                continue
             try:
                 doc = json.loads(line)
             except json.JSONDecodeError:
-                self._stderr.append(line)
+                doc = None
+            if not isinstance(doc, dict):
+                self._stderr.append(line)  # stray output: keep it for the error message
                 continue
             if want_id is not None and not (isinstance(doc, dict) and doc.get("id") == want_id):
                 self._stderr.append(f"(stray line on stdout) {line[:200]}")
@@ -180,20 +180,20 @@ class JsonLinesWorker:
                         self.start()
                     proc = self.proc
                     if proc is None:  # closed from another thread (the adapter shutting down)
-                        raise RenderError(f"{self.name}: the worker was closed")
+                        raise RenderError("the worker was closed", where=self.name)
                     proc.stdin.write(json.dumps(payload) + "\n")
                     proc.stdin.flush()
                     answer = self._read(timeout or self.request_timeout, msg.get("op", "request"), self._next_id)
                 except (_WorkerDied, BrokenPipeError, OSError, ValueError) as exc:  # ValueError: a closed pipe
                     self.proc = None
                     if attempt:
-                        raise RenderError(str(exc) if isinstance(exc, _WorkerDied) else
-                                          f"{self.name}: worker pipe broke: {exc}{self._tail()}") from None
+                        raise RenderError(exc.message if isinstance(exc, _WorkerDied) else
+                                          f"worker pipe broke: {exc}{self._tail()}", where=self.name) from None
                     continue
                 if not answer.get("ok"):
-                    raise RenderError(f"{self.name}: {answer.get('error', 'failed')}{self._tail(4)}")
+                    raise RenderError(f"{answer.get('error', 'failed')}{self._tail(4)}", where=self.name)
                 return answer
-        raise RenderError(f"{self.name}: worker unavailable")
+        raise RenderError("worker unavailable", where=self.name)
 
 
 class _WorkerDied(RenderError):

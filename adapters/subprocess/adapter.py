@@ -135,7 +135,7 @@ class SubprocessAdapter(Adapter):
                 try:
                     self.worker.request(request)
                 except RenderError as exc:
-                    raise self._fail(model, p, str(exc).split(": ", 1)[-1]) from None
+                    raise self._fail(model, p, exc.message) from None
             else:
                 stderr = self._run_once(model, p, values)
             return self._read(model, p, output, scene, stderr)

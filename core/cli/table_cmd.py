@@ -115,7 +115,7 @@ def lookup(args: argparse.Namespace) -> int:
     from ..store import Store, owned
     from ..tables.lookup import write_answer
     from .progress import RenderProgress
-    from .remap_cmd import print_report
+    from .show import print_report
 
     resolved, answer, header, registry = _lookup_job(args)
     if args.no_render:
@@ -178,7 +178,7 @@ def _table_file(table_arg: str):
 
 
 def _print_answer(resolved, answer, folder, files) -> None:
-    from .remap_cmd import format_params
+    from .show import format_params
 
     lk = answer.lookup
     spec = resolved.target_spec

@@ -78,9 +78,32 @@ def schema_parser() -> argparse.ArgumentParser:
     return p
 
 
-def schema(args: argparse.Namespace) -> int:
-    from ..plugins import collect_schemas
+def collect_schemas(pm=None) -> dict[str, Any]:
+    """File formats by name: the core's own and those plugins register (`remap schema NAME`). Here,
+    beside the command, not in the plugin host: the host knows no file format."""
+    from ..experiments.spec import Experiment
+    from ..job import Job
+    from ..plugins import get_plugin_manager
+    from ..report import Report
+    from ..scene import ProbeScene
+    from ..schemas import Material
+    from ..settings import Settings
+    from ..tables import Table, TableSpec
 
+    out: dict[str, Any] = {"report": Report, "material": Material, "scene": ProbeScene, "experiment": Experiment,
+                           "job": Job, "settings": Settings, "table": Table, "table-spec": TableSpec}
+    pm = pm or get_plugin_manager()
+
+    def register(name: str, model: Any) -> None:
+        if name in out:
+            raise ConfigError(f"file format {name!r} is registered twice")
+        out[name] = model
+
+    pm.hook.brdfremap_register_schemas(register=register)
+    return out
+
+
+def schema(args: argparse.Namespace) -> int:
     known = collect_schemas()
     if args.name not in known:
         raise ConfigError(f"unknown file format {args.name!r} (known: {', '.join(sorted(known))})", field="NAME")

@@ -95,7 +95,7 @@ def _forward_task(exp: Experiment, file: str, p: Point, scene: ProbeScene, regis
               target=exp.target, scene=scene, settings=exp.options.for_study(), label=f"{file} point {p.id}")
     where = Where(source_file=file, source_prefix="source.",
                   params_prefix=f"point {p.id} ({exp.sweep.param}={label(p.value)})",
-                  target_file=file, target_prefix="target.", fix_prefix="target.fix")
+                  target_file=file, target_prefix="target.", fix_prefix="target.fix", command_line=False)
     return Task(p.id, resolve(job, registry, where).job, f"{p.id} {exp.sweep.param}={label(p.value)}")
 
 
@@ -103,7 +103,7 @@ def _run_back(exp: Experiment, file: str, scene: ProbeScene, registry: AdapterRe
               rows: list[Row]) -> None:
     back = exp.back_side()
     where = Where(source_file=file, source_prefix="target.", target_file=file, target_prefix="back.",
-                  fix_prefix="back.fix")
+                  fix_prefix="back.fix", command_line=False)
     tasks = []
     for r in rows:
         fwd = r.forward.report

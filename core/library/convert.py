@@ -142,7 +142,7 @@ def _through_table(item: Item, dest: Destination, registry: AdapterRegistry, sce
     job = Job(source=mean, target=t.spec.target, scene=scene, settings=settings, label=f"{e.file}: {e.name}",
               lookup=answer.lookup.model_copy(update={"file": use.file}))
     where = Where(source_file=e.file, params_prefix=f"{e.name}: params", target_file=use.file,
-                  target_prefix="target.", fix_prefix="target.fix")
+                  target_prefix="target.", fix_prefix="target.fix", command_line=False)
     item.model = t.spec.target.model
     item.why = f"textured: remapped texel by texel through the table {t.name!r}"
     if len(answers) > 1:

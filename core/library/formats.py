@@ -14,51 +14,10 @@ from typing import Any, Protocol
 from pydantic import Field
 
 from ..errors import ConfigError
-from ..model import Strict
-from ..schemas import Material
-from ..textures import Texture
+from .entries import Converted, Entry, Reader
+from .yaml_reader import YamlReader
 
-
-class Entry(Strict):
-    """One material found in a file: convertible (``material``), or not (``problem`` says why)."""
-
-    name: str = Field(description="The material's name in its file.")
-    file: str = Field(description="The file it was read from.")
-    material: Material | None = Field(None, description="The source material; None when it cannot be converted.")
-    problem: str = Field("", description="Why it cannot be converted (an unsupported type).")
-    unreadable: bool = Field(False, description="The file itself could not be read (``problem`` says where and "
-                                                "why): a failure, where an unsupported type is not.")
-    notes: list[str] = Field(default_factory=list, description="What the reading changed or left out: inputs with "
-                                                               "no counterpart, a correspondence used.")
-    textured: list[str] = Field(default_factory=list, description="Inputs driven by a texture or a node graph, "
-                                                                  "e.g. \"base_color <- image 'brass.png'\": "
-                                                                  "converted with their constant value.")
-
-
-class Reader(Protocol):
-    name: str
-    suffixes: tuple[str, ...]
-    """File endings it reads (".xml"); a reader may decline a file of its ending (`accepts`)."""
-
-    def accepts(self, path: Path) -> bool:
-        """Whether this file is one of its kind (cheap: a look at its first bytes)."""
-
-    def read(self, path: Path) -> list[Entry]:
-        """Every material of the file, convertible or not. A file it cannot read at all is a
-        ConfigError naming the file."""
-
-
-@dataclass(frozen=True)
-class Converted:
-    """A material converted, as a writer receives it: the source's name and the fitted target."""
-
-    name: str
-    model: str
-    params: dict[str, Any]
-    folder: Path
-    """The job's result folder (its own native files are there)."""
-    textures: dict[str, Texture] = field(default_factory=dict)
-    """Parameters read from maps: each `file` relative to the library's folder (`textures/...`)."""
+__all__ = ["Converted", "Entry", "Reader", "Formats", "collect_formats", "expand_inputs", "read_all"]
 
 
 class Writer(Protocol):
@@ -95,7 +54,6 @@ class Formats:
 def collect_formats(pm=None) -> Formats:
     """Every registered reader and writer (the core's YAML reader first)."""
     from ..plugins import get_plugin_manager
-    from .yaml_reader import YamlReader
 
     pm = pm or get_plugin_manager()
     formats = Formats(readers=[YamlReader()])

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from ..configio import read_yaml
 from ..schemas import load_material
-from .formats import Entry
+from .entries import Entry
 
 
 class YamlReader:

@@ -337,7 +337,7 @@ def test_choice_prefers_the_lookups_closest_to_direct_fits():
 
 
 def test_schema_lists_the_table_formats():
-    from brdfremap.core.plugins import collect_schemas
+    from brdfremap.core.cli.tools import collect_schemas
 
     known = collect_schemas()
     assert known["table"] is Table and known["table-spec"] is TableSpec
