@@ -16,6 +16,7 @@ from brdfremap.adapters.mitsuba.bsdfs import (
     ALPHA_MIN,
     INV_PI,
     INV_TWOPI,
+    TABLE_SIZE,
     WARD_VARIANTS,
     _as_exponent,
     _bool,
