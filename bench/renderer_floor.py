@@ -31,7 +31,8 @@ def main() -> int:
     conditions = [(c.name, c.label, (a, b)) for c, a, b in held_out_scenes(scene, False, scene.lights)]
     with open_adapters(registry(), [args.source, args.target]) as pool:
         floors = calibration_floors(pool[args.source], pool[args.target], conditions, args.metal)
-    what = f"{args.metal} aluminium" if args.metal else "white Lambertians"
+        both = args.metal and all(args.metal in pool[n].metals for n in (args.source, args.target))
+    what = f"{args.metal} aluminium" if both else "white Lambertians"
     print(f"{args.source} against {args.target}, {what}, validation at {4 * args.spp} spp or more")
     print(f"{'condition':12} {'spp':>5} {'error':>8} {'noise':>8} {'beyond':>8}")
     measured = [v for k, v in _MEASURED.items() if k[0] == "calibration"]

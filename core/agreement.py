@@ -135,10 +135,11 @@ def calibration_floors(source: Adapter, target: Adapter,
                        metal: str | None = None) -> dict[str, Disagreement]:
     """How far the two renderers differ on a white Lambertian (a metal: on their metals of its kind)
     under each held-out condition (not the fit scene, whose differences the fit absorbs): measured once
-    a process for each pair, reference and scene. None where an adapter declares no calibration
-    material, or both sides are one renderer."""
+    a process for each pair, reference and scene. None where an adapter declares no such material, or
+    both sides are one renderer."""
+    kind = _kind(source, target, metal)
     if getattr(source, "unmetered", source) is getattr(target, "unmetered", target) or \
-            source.calibration is None or target.calibration is None:
+            reference(source, kind) is None or reference(target, kind) is None:
         return {}
     found = (calibration_floor(source, target, name, label, scenes, metal)
              for name, label, scenes in conditions if name != "scene")

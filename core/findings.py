@@ -97,8 +97,9 @@ class RenderersFloor(_Note):
     error: float = Field(description="The two renderers' reference materials' relative RMSE there.")
     beyond_noise: float
     result_error: float = Field(description="The result's own error there.")
-    reference: str = Field("white Lambertian", description="The reference: a white Lambertian, or for a metal the "
-                                                           "adapters' smooth or rough aluminium.")
+    reference: str = Field("white Lambertian", description="The reference: 'white Lambertian', or for a metal "
+                                                           "'smooth metal' or 'rough metal' (the adapters' "
+                                                           "aluminium, `Adapter.metals`).")
 
     def sentence(self) -> str:
         return (f"the renderers disagree by {self.error:.1%} under the {self.label} even on a {self.reference} "

@@ -30,11 +30,14 @@ from .texturing import Textured
 SCHEMA_VERSION = 7
 """Bump whenever the fields change (an older reader refuses a field it does not know). 4: a job's
 table lookup, a textured source's record; 5: the account of the job's renders; 6: the renderers'
-difference on a white Lambertian in a held-out error (`renderers`) and its note (`renderers_floor`)."""
-READS_FROM = 6
+difference on a white Lambertian in a held-out error (`renderers`) and its note (`renderers_floor`);
+7: the held inputs the source needs (`inputs_tried`, `Settings.inputs`) and what a renderers'
+floor was measured on (`reference`)."""
+READS_FROM = 7
 """The oldest format read. 4 and 5 only added fields (left out of the digest while absent), but 6
 changed what a verdict is (an unresolved condition is unchecked, no longer a note of an ok) and what
-its findings hold, and a result of 5 or before is run again (its engine is older too)."""
+its findings hold, and 7 what a fit varies (the inputs a source needs) and what a metal is judged
+beyond (the renderers' metals): a result of 6 or before is run again (its engine is older too)."""
 
 
 class NewerReportError(ConfigError):
@@ -239,7 +242,7 @@ def parse_report(doc: Any, file: str) -> Report:
                           f"{SCHEMA_VERSION}): upgrade brdf-remap to read it", file=file)
     if version < READS_FROM:
         raise ConfigError(f"written by an older brdf-remap (report schema {version}; this one reads "
-                          f"{SCHEMA_VERSION}): run the job again to replace it", file=file)
+                          f"{READS_FROM} to {SCHEMA_VERSION}): run the job again to replace it", file=file)
     try:
         report = Report.model_validate(doc)
     except ValidationError as exc:

@@ -34,7 +34,7 @@ class Need(str, Enum):
     RETRO_DIFFUSE = "retro-reflective diffuse"
     """Burley's diffuse, brighter towards retro-reflection as it roughens (Disney's principled). No
     input of the shipped targets renders it: Principled's Diffuse Roughness, tried for it, lowered a
-    Mitsuba principled banana's fit error 5.3 -> 3.6 % and raised its headlight error 4.6 -> 13.5 %
+    Mitsuba principled banana's fit error 5.3 -> 3.5 % and raised its headlight error 4.6 -> 13.5 %
     (Oren-Nayar's flattening is another shape), so no parameter is fitted for it."""
 
 

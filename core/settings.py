@@ -39,9 +39,10 @@ class Settings(Strict):
                             "samples only; as-given: the scene as it is (the paper's probe).")
     inputs: Literal["needed", "given"] = Field(
         "needed", description="needed: the target's held inputs that the source's reading needs (a metal's F82 tint "
-                              "for a complex IOR, Diffuse Roughness for a diffuse that is not Lambert's) are tried "
-                              "where the fit without them leaves more than the noise, and kept where they lower "
-                              "its error by a tenth; given: the target's fitted inputs and what the source carries.")
+                              "for a complex IOR, Diffuse Roughness for an Oren-Nayar diffuse) are tried where the "
+                              "fit without them leaves more than the noise, and kept where they lower its error by "
+                              "a tenth; given: the target's fitted inputs and what the source carries. Tables and "
+                              "experiments always fit the given ones (their points all vary the same parameters).")
     validation: Literal["held-out", "none"] = Field(
         "held-out", description="held-out: after the fit, render source and target under held-out "
                                                   "lights (grazing, rim, headlight, the studio environment) and "

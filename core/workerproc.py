@@ -155,7 +155,7 @@ class JsonLinesWorker:
             line = line.strip()
             try:
                 doc = json.loads(line)
-            except json.JSONDecodeError:
+            except (json.JSONDecodeError, RecursionError):  # RecursionError: a stray line of [[[[...
                 doc = None
             if not isinstance(doc, dict):
                 self._stderr.append(line)  # stray output: keep it for the error message

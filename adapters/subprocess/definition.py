@@ -128,13 +128,15 @@ class RendererDef(BaseModel):
                     raise ValueError(f"unknown placeholder {{{name}}} in {item!r}: a define knows {{key}} and {{value}}")
         return items
 
-    @field_validator("format")
+    @model_validator(mode="before")
     @classmethod
-    def _format(cls, v: int) -> int:
-        if v > FORMAT:
-            raise ValueError(f"written for a newer brdf-remap (definition format {v}; this one reads 1 to {FORMAT}): "
-                             f"upgrade brdf-remap, or write it in format {FORMAT}")
-        return v
+    def _format(cls, data: Any) -> Any:
+        """A newer format first: its fields this version does not know are not the user's mistake."""
+        v = data.get("format") if isinstance(data, dict) else None
+        if isinstance(v, int) and v > FORMAT:
+            raise ValueError(f"format: written for a newer brdf-remap (definition format {v}; this one reads 1 to "
+                             f"{FORMAT}): upgrade brdf-remap, or write it in format {FORMAT}")
+        return data
 
     @model_validator(mode="after")
     def _modes(self) -> "RendererDef":
@@ -237,11 +239,13 @@ _SAID: set[str] = set()
 
 
 def _say_once(path: Path, notes: list[str]) -> None:
-    """An older definition's notes, once a process for each file."""
+    """An older definition's notes, once for each file, by the process the user started (a worker
+    process loads the definition again, and says nothing)."""
+    import multiprocessing
     import sys
 
     key = str(path.resolve())
-    if key in _SAID:
+    if key in _SAID or multiprocessing.parent_process() is not None:
         return
     _SAID.add(key)
     for n in notes:

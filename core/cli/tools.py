@@ -4,6 +4,7 @@ formats, and at one material."""
 from __future__ import annotations
 
 import argparse
+from typing import Any
 import json
 import os
 import sys

@@ -1,6 +1,7 @@
 """The schedule of one remap, as declared steps: fit each planned stage (at the coarse level, then
 polished at full resolution), render the result, refine jointly while a joint step predicts a
-gain, polish at more samples when the fit ends at the render noise, and take the verdict once
+gain, try the held inputs the source needs where the fit leaves more than the noise, polish at
+more samples when the fit ends at the render noise, and take the verdict once
 at the final parameters. The optimiser only ever calls ``render(params, lobe) -> image``."""
 
 from __future__ import annotations

@@ -11,13 +11,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
-from pydantic import Field
-
 from ..errors import ConfigError
 from .entries import Converted, Entry, Reader
 from .yaml_reader import YamlReader
 
-__all__ = ["Converted", "Entry", "Reader", "Formats", "collect_formats", "expand_inputs", "read_all"]
+__all__ = ["Converted", "Entry", "Reader", "Writer", "Formats", "collect_formats", "expand_inputs", "read_all",
+           "clip_into"]
 
 
 class Writer(Protocol):

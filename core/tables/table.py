@@ -141,8 +141,7 @@ class Table(WithDerived):
         for ax in doc["spec"]["axes"].values():  # nor 4 listed values
             if ax["values"] is None:
                 del ax["values"]
-        if doc["spec"]["options"].get("inputs") == "needed":  # nor 5 the held inputs a source needs
-            del doc["spec"]["options"]["inputs"]
+        doc["spec"]["options"].pop("inputs", None)  # its fits never vary them (`Settings.for_study`)
         for c in doc["candidates"].values():
             if c["correction"] is None:
                 del c["correction"], c["correction_cv"]

@@ -143,6 +143,7 @@ def test_a_definition_of_the_first_format_is_read_as_it_was_meant_with_a_note(tm
     assert err.count("note:") == 1 and "brace.yaml: format 1: lambert.lobes: the short form leaves color" in err
     assert "add `format: 2` once changed" in err, err
     newer = _definition(tmp_path, fmt=3)
+    newer.write_text(newer.read_text() + "shading_language: osl\n")  # a field of that newer format
     with pytest.raises(ConfigError, match=r"brace.yaml.*newer brdf-remap \(definition format 3; this one reads 1 "
                                           r"to 2\)"):
         adapter_class(newer)

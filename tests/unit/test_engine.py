@@ -377,7 +377,17 @@ def test_a_needed_input_is_fitted_where_the_fit_leaves_more_than_the_noise():
 
 def test_a_needed_input_is_not_tried_where_the_fit_is_at_the_noise():
     base = TOY.complete({})
-    renders, adapter = _renders()
+    renders, _ = _renders()
     res = remap(TOY, base, ["diffuse", "specular", "alpha"], renders, ONE, needed={"unused": "nothing"})
     assert not [f for f in res.verdict.findings if f.kind == "inputs_tried"]
     assert "unused" not in res.fitted
+
+
+def test_a_needed_input_that_does_not_help_is_tried_and_held():
+    # The diffuse lobe held at 0 leaves a mismatch that `unused` (it changes nothing) cannot mend.
+    renders, _ = _renders()
+    res = remap(TOY, TOY.complete({"diffuse": 0.0}), ["specular", "alpha"], renders, ONE,
+                needed={"unused": "nothing it renders"})
+    (tried,) = [f for f in res.verdict.findings if f.kind == "inputs_tried"]
+    assert not tried.kept and tried.after >= 0.9 * tried.before and "not a tenth better, so held" in tried.sentence()
+    assert "unused" not in res.fitted and res.params["unused"] == 0.5

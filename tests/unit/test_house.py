@@ -8,7 +8,7 @@ from brdfremap.core.cli import main
 from brdfremap.core.errors import ConfigError
 from brdfremap.core.execute import AdapterPool, execute
 from brdfremap.core.job import Job, Target, resolve
-from brdfremap.core.report import SCHEMA_VERSION, Report, parse_report, read_report
+from brdfremap.core.report import READS_FROM, SCHEMA_VERSION, Report, parse_report, read_report
 from brdfremap.core.scene import ProbeScene
 from brdfremap.core.schemas import Material
 from brdfremap.core.settings import DEFAULTS, Settings
@@ -96,10 +96,11 @@ def test_the_report_reads_back_and_other_versions_are_clear_errors(tmp_path):
     bad.write_text("{not json")
     with pytest.raises(ConfigError, match="bad.json: cannot read it as JSON"):
         read_report(bad)
-    # A result of format 5 or before (an unresolved light a note of an ok, no `unchecked`) is run again.
-    with pytest.raises(ConfigError, match=rf"older brdf-remap \(report schema 5; this one reads {SCHEMA_VERSION}\): "
-                                          "run the job again"):
-        parse_report({**doc, "schema_version": 5}, "r.json")
+    # A result of format 6 or before (no held inputs a source needs, a metal judged beyond white
+    # Lambertians) is run again.
+    with pytest.raises(ConfigError, match=rf"older brdf-remap \(report schema 6; this one reads {READS_FROM} to "
+                                          rf"{SCHEMA_VERSION}\): run the job again"):
+        parse_report({**doc, "schema_version": 6}, "r.json")
 
 
 def test_the_store_keeps_a_result_whole_and_finds_it_by_key(tmp_path):
@@ -166,3 +167,26 @@ def test_a_report_document_validates_against_the_published_schema(tmp_path):
     assert not list(validator().iter_errors(doc))
     assert list(validator().iter_errors({**doc, "verdict": "fine"}))  # the schema does constrain
     assert Report.model_validate(doc).reliable == doc["reliable"]
+
+
+def test_an_error_keeps_its_parts_and_they_cross_processes():
+    import pickle
+
+    from brdfremap.core.errors import RenderError
+
+    err = pickle.loads(pickle.dumps(ConfigError("must be positive", file="m.yaml", field="params.alpha")))
+    assert str(err) == "m.yaml: params.alpha: must be positive"
+    assert (err.message, err.where, err.file, err.field) == ("must be positive", "m.yaml: params.alpha", "m.yaml",
+                                                            "params.alpha")
+    err = pickle.loads(pickle.dumps(RenderError("worker unavailable", where="cycles")))
+    assert str(err) == "cycles: worker unavailable" and err.message == "worker unavailable"
+
+
+def test_a_study_fits_the_given_inputs_and_a_job_from_a_file_names_its_keys():
+    from brdfremap.core.job import Where
+
+    assert Settings().inputs == "needed" and Settings().for_study().inputs == "given"
+    assert Settings(fit_scene="as-given").for_study().fit_scene == "as-given"
+    assert Where().fix_field("alpha") == "--fix alpha" and Where().field("--scene", "scene") == "--scene"
+    filed = Where(fix_prefix="target.fix", command_line=False)
+    assert filed.fix_field("alpha") == "target.fix.alpha" and filed.field("--scene", "scene") == "scene"
