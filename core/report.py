@@ -11,10 +11,9 @@ import platform
 from pathlib import Path
 from typing import Any
 
-from pydantic import Field, ValidationError, computed_field
+from pydantic import Field, computed_field
 
 from .account import Account
-from .configio import validation_message
 from .engine.results import Check, EngineResult, StageResult
 from .engine.tuning import ENGINE_VERSION
 from .errors import ConfigError
@@ -26,6 +25,7 @@ from .model import WithDerived
 from .renders import rounded
 from .scene import ProbeScene
 from .texturing import Textured
+from .versioned import JsonFormat, check_version, parse, read_json
 
 SCHEMA_VERSION = 7
 """Bump whenever the fields change (an older reader refuses a field it does not know). 4: a job's
@@ -229,37 +229,19 @@ def report_schema() -> dict[str, Any]:
     return Report.model_json_schema(mode="serialization")
 
 
+REPORT_FORMAT = JsonFormat(kind="report schema", reads=tuple(range(READS_FROM, SCHEMA_VERSION + 1)),
+                           older="run the job again to replace it", newer_error=NewerReportError,
+                           edited="was edited after it was written (its digest does not match its content): it is "
+                                  "not taken for the job's result")
+
+
 def parse_report(doc: Any, file: str) -> Report:
     """A report from its JSON document; a clear ConfigError for another version of the format."""
     if not isinstance(doc, dict):
         raise ConfigError("not a brdf-remap report (expected a JSON object)", file=file)
-    version = doc.get("schema_version")
-    if not isinstance(version, int):
-        raise ConfigError(f"written by an older brdf-remap (before report schema {SCHEMA_VERSION}): run the job again "
-                          "to replace it", file=file)
-    if version > SCHEMA_VERSION:
-        raise NewerReportError(f"written by a newer brdf-remap (report schema {version}; this one reads "
-                          f"{SCHEMA_VERSION}): upgrade brdf-remap to read it", file=file)
-    if version < READS_FROM:
-        raise ConfigError(f"written by an older brdf-remap (report schema {version}; this one reads "
-                          f"{READS_FROM} to {SCHEMA_VERSION}): run the job again to replace it", file=file)
-    try:
-        report = Report.model_validate(doc)
-    except ValidationError as exc:
-        field, msg = validation_message(exc)
-        raise ConfigError(msg, file=file, field=field) from exc
-    if doc.get("digest") != report.digest:
-        raise ConfigError("was edited after it was written (its digest does not match its content): it is not "
-                          "taken for the job's result", file=file)
-    return report
+    check_version(doc, REPORT_FORMAT, file)
+    return parse(doc, Report, REPORT_FORMAT, file, digest="digest")
 
 
 def read_report(path: str | Path) -> Report:
-    p = Path(path)
-    try:
-        doc = json.loads(p.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ConfigError("file not found (check the path)", file=str(p)) from None
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        raise ConfigError(f"cannot read it as JSON: {exc}", file=str(p)) from None
-    return parse_report(doc, str(p))
+    return parse_report(read_json(Path(path), REPORT_FORMAT), str(path))

@@ -79,10 +79,17 @@ def schema_parser() -> argparse.ArgumentParser:
     return p
 
 
+WRITTEN = frozenset({"report", "table", "convert", "lookup", "experiment-summary"})
+"""The formats the tool writes (their schema as written, derived fields included); the others it reads."""
+
+
 def collect_schemas(pm=None) -> dict[str, Any]:
     """File formats by name: the core's own and those plugins register (`remap schema NAME`). Here,
     beside the command, not in the plugin host: the host knows no file format."""
     from ..experiments.spec import Experiment
+    from ..experiments.table import ExperimentSummary
+    from ..library.records import ConvertSummary
+    from ..tables.lookup import LookupRecord
     from ..job import Job
     from ..plugins import get_plugin_manager
     from ..report import Report
@@ -92,7 +99,8 @@ def collect_schemas(pm=None) -> dict[str, Any]:
     from ..tables import Table, TableSpec
 
     out: dict[str, Any] = {"report": Report, "material": Material, "scene": ProbeScene, "experiment": Experiment,
-                           "job": Job, "settings": Settings, "table": Table, "table-spec": TableSpec}
+                           "job": Job, "settings": Settings, "table": Table, "table-spec": TableSpec,
+                           "convert": ConvertSummary, "lookup": LookupRecord, "experiment-summary": ExperimentSummary}
     pm = pm or get_plugin_manager()
 
     def register(name: str, model: Any) -> None:
@@ -108,7 +116,7 @@ def schema(args: argparse.Namespace) -> int:
     known = collect_schemas()
     if args.name not in known:
         raise ConfigError(f"unknown file format {args.name!r} (known: {', '.join(sorted(known))})", field="NAME")
-    mode = "serialization" if args.name in ("report", "table") else "validation"
+    mode = "serialization" if args.name in WRITTEN else "validation"
     doc = known[args.name].model_json_schema(mode=mode)
     doc = {"$schema": "https://json-schema.org/draft/2020-12/schema", **doc}
     print(json.dumps(doc, indent=2, ensure_ascii=False))

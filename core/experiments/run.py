@@ -6,7 +6,6 @@ alone is redone; the table, summary and plots are rebuilt from the reports at th
 
 from __future__ import annotations
 
-import json
 import re
 import time
 from pathlib import Path
@@ -22,8 +21,8 @@ from ..schemas import Material
 from ..store import Store, owned
 from .analysis import Leg, Row, detect_cliffs, roundtrip_fit
 from .plots import cliff_figure, roundtrip_plot, sweep_plot
-from .spec import Experiment, Point, label, points_of
-from .table import ExperimentResult, summary, write_csv
+from .spec import Experiment, ExperimentKind, Point, label, points_of
+from .table import ExperimentResult, ExperimentSummary, summary, write_csv
 
 
 def run_experiment(exp: Experiment, file: str, out: str | Path, registry: AdapterRegistry, workers: Workers, *,
@@ -33,7 +32,7 @@ def run_experiment(exp: Experiment, file: str, out: str | Path, registry: Adapte
     points = points_of(exp)
     validate(exp, file, registry)
     forward = [_forward_task(exp, file, p, scene, registry) for p in points]  # every point checked first
-    if exp.kind == "roundtrip":
+    if exp.kind is ExperimentKind.ROUNDTRIP:
         back = exp.back_side()
         model_of(registry, back.adapter, back.model, file, "back.").complete(back.fix, file=file, prefix="back.fix")
     with owned(out) as folder:
@@ -44,14 +43,14 @@ def run_experiment(exp: Experiment, file: str, out: str | Path, registry: Adapte
         fwd = runner.run(forward)
         tgt_spec = registry.get(exp.target.adapter).models[exp.target.model]
         rows = [Row(p, _source_quantities(d), Leg.of(d.report, tgt_spec, d.resumed)) for p, d in zip(points, fwd)]
-        if exp.kind == "roundtrip":
+        if exp.kind is ExperimentKind.ROUNDTRIP:
             _run_back(exp, file, scene, registry, runner, rows)
         cliffs = detect_cliffs(exp, rows, tgt_spec)
-        fit = roundtrip_fit(exp, rows) if exp.kind == "roundtrip" else None
+        fit = roundtrip_fit(exp, rows) if exp.kind is ExperimentKind.ROUNDTRIP else None
         files = _write_outputs(folder, exp, rows, cliffs, fit)
         result = ExperimentResult(exp, rows, cliffs, fit, files, time.perf_counter() - t0,
                                   sum(leg.resumed for r in rows for leg in r.legs), workers.where)
-        files.append(write_json_atomic(folder / "summary.json", summary(result)))
+        files.append(write_json_atomic(folder / "summary.json", summary(result).model_dump(mode="json")))
     return result
 
 
@@ -65,7 +64,7 @@ def validate(exp: Experiment, file: str, registry: AdapterRegistry) -> None:
                               file=file, field=where)
     target = model_of(registry, exp.target.adapter, exp.target.model, file, "target.")
     sides = {"source": spec, "target": target}
-    if exp.kind == "roundtrip":
+    if exp.kind is ExperimentKind.ROUNDTRIP:
         back = exp.back_side()
         sides["back"] = model_of(registry, back.adapter, back.model, file, "back.")
     for where, text in (("plot.x", exp.plot.x), ("plot.y", exp.plot.y)):
@@ -73,7 +72,7 @@ def validate(exp: Experiment, file: str, registry: AdapterRegistry) -> None:
         if side not in sides:
             raise ConfigError(f"{side}.<name> belongs to a round trip", file=file, field=where)
         _known(sides[side], name, file, where)
-    if exp.kind == "roundtrip":
+    if exp.kind is ExperimentKind.ROUNDTRIP:
         compare = exp.compare or exp.plot.x.split(".", 1)[1]
         for side in ("source", "back"):
             _known(sides[side], compare, file, "compare")
@@ -141,16 +140,16 @@ def _check_outputs(folder: Path, file: str) -> None:
 def _previous_cliffs(folder: Path) -> set[str]:
     """The cliff figures the previous run listed in its summary (the only ones this run may remove)."""
     try:
-        doc = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
-        return {n for n in doc.get("files", []) if isinstance(n, str) and re.fullmatch(r"cliff-\d+\.png", n)}
-    except (OSError, ValueError, AttributeError):
+        doc = ExperimentSummary.model_validate_json((folder / "summary.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):  # none, or not one of ours (pydantic's ValidationError is a ValueError)
         return set()
+    return {n for n in doc.files if re.fullmatch(r"cliff-\d+\.png", n)}
 
 
 def _write_outputs(folder: Path, exp: Experiment, rows: list[Row], cliffs: list[dict], fit) -> list[Path]:
     previous = _previous_cliffs(folder)
     files = [write_csv(folder / "results.csv", exp, rows), sweep_plot(folder / "sweep", exp, rows)]
-    if exp.kind == "roundtrip":
+    if exp.kind is ExperimentKind.ROUNDTRIP:
         files.append(roundtrip_plot(folder / "roundtrip", exp, rows, fit))
     for n, c in enumerate(cliffs):
         files.append(cliff_figure(folder / f"cliff-{n + 1}.png", exp, rows[c["before"]], rows[c["after"]], folder))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import StrEnum
 from pathlib import Path
 from typing import Any, Literal
 
@@ -90,11 +91,18 @@ class CliffSpec(_Strict):
                                                           "relative RMSE) never count.")
 
 
+class ExperimentKind(StrEnum):
+    """A sweep remaps each point once; a roundtrip remaps it there and back."""
+
+    SWEEP = "sweep"
+    ROUNDTRIP = "roundtrip"
+
+
 class Experiment(_Strict):
     """A sweep (remap every point of a one-parameter family of source materials) or a round trip
     (remap each result back to the source model)."""
 
-    kind: Literal["sweep", "roundtrip"]
+    kind: ExperimentKind
     name: str
     description: str = ""
     figure: str = Field("", description="The paper's figure this reproduces.")
@@ -116,7 +124,7 @@ class Experiment(_Strict):
         for name, v in (("plot.x", self.plot.x), ("plot.y", self.plot.y)):
             if v.split(".", 1)[0] not in ("source", "target", "back") or "." not in v:
                 raise ValueError(f"{name} must look like source.<name>, target.<name> or back.<name>")
-        if self.kind == "sweep" and (self.back is not None or self.compare is not None):
+        if self.kind is ExperimentKind.SWEEP and (self.back is not None or self.compare is not None):
             raise ValueError("back and compare belong to kind: roundtrip")
         n = len(self.sweep.all_values()) * (len(self.groups.values) if self.groups else 1)
         if n > MAX_POINTS:

@@ -10,7 +10,10 @@ from typing import Any
 
 import numpy as np
 
+from pydantic import Field
+
 from ..atomic import write_text_atomic
+from ..model import Strict
 from ..schemas import Value
 from .analysis import Leg, Row
 from .spec import Experiment, label
@@ -83,25 +86,58 @@ def write_csv(path: Path, exp: Experiment, rows: list[Row]) -> Path:
     return write_text_atomic(path, buf.getvalue())
 
 
-def summary(result: ExperimentResult) -> dict[str, Any]:
+SUMMARY_SCHEMA_VERSION = 1
+
+
+class Cliff(Strict):
+    before: str = Field(description="The point before the jump.")
+    after: str = Field(description="The point after it.")
+    why: str
+    short: str
+
+
+class ExperimentSummary(Strict):
+    """`summary.json`: an experiment's points and what they showed (`remap schema experiment-summary`)."""
+
+    schema_version: int = SUMMARY_SCHEMA_VERSION
+    name: str
+    figure: str
+    points: int
+    flagged: int = Field(description="Points whose verdict is not ok.")
+    unstable: int
+    after_a_cliff: int
+    model_mismatch_only: int
+    cliffs: list[Cliff]
+    roundtrip_fit_unflagged: Any = Field(description="A roundtrip's fit of recovered against original (None: a sweep).")
+    median_relative_rmse: float | None
+    renders: int = Field(description="Target renders of this run (resumed points not counted).")
+    renders_all_points: int
+    remap_seconds_all_points: float
+    remaps_resumed: int
+    ran_in: str
+    seconds: float
+    files: list[str]
+
+
+def summary(result: ExperimentResult) -> ExperimentSummary:
     rows, legs = result.rows, result.legs
-    return {
-        "name": result.exp.name,
-        "figure": result.exp.figure,
-        "points": len(rows),
-        "flagged": sum(r.flagged for r in rows),
-        "unstable": sum(any(leg.unstable for leg in r.legs) for r in rows),
-        "after_a_cliff": sum(bool(r.cliff) for r in rows),
-        "model_mismatch_only": sum(r.mismatch for r in rows),
-        "cliffs": [{"before": rows[c["before"]].point.id, "after": rows[c["after"]].point.id, "why": c["why"],
-                    "short": c["short"]} for c in result.cliffs],
-        "roundtrip_fit_unflagged": result.fit,
-        "median_relative_rmse": float(np.median([r.forward.relative_rmse for r in rows])) if rows else None,
-        "renders": int(sum(leg.report.renders for leg in legs if not leg.resumed)),
-        "renders_all_points": int(sum(leg.report.renders for leg in legs)),
-        "remap_seconds_all_points": float(sum(leg.report.seconds for leg in legs)),
-        "remaps_resumed": result.resumed,
-        "ran_in": result.where,
-        "seconds": result.seconds,
-        "files": [p.name for p in result.files],
-    }
+    return ExperimentSummary(
+        name=result.exp.name,
+        figure=result.exp.figure,
+        points=len(rows),
+        flagged=sum(r.flagged for r in rows),
+        unstable=sum(any(leg.unstable for leg in r.legs) for r in rows),
+        after_a_cliff=sum(bool(r.cliff) for r in rows),
+        model_mismatch_only=sum(r.mismatch for r in rows),
+        cliffs=[Cliff(before=rows[c["before"]].point.id, after=rows[c["after"]].point.id, why=c["why"],
+                      short=c["short"]) for c in result.cliffs],
+        roundtrip_fit_unflagged=result.fit,
+        median_relative_rmse=float(np.median([r.forward.relative_rmse for r in rows])) if rows else None,
+        renders=int(sum(leg.report.renders for leg in legs if not leg.resumed)),
+        renders_all_points=int(sum(leg.report.renders for leg in legs)),
+        remap_seconds_all_points=float(sum(leg.report.seconds for leg in legs)),
+        remaps_resumed=result.resumed,
+        ran_in=result.where,
+        seconds=result.seconds,
+        files=[p.name for p in result.files],
+    )

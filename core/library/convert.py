@@ -29,6 +29,7 @@ from ..tables import Table, TableMap
 from ..tables.lookup import Answer
 from ..textures import Texture
 from .formats import Converted, Entry, Formats
+from .records import ConvertSummary, ItemStatus, MaterialRow
 
 
 @dataclass(frozen=True)
@@ -62,12 +63,12 @@ class Item:
     failure: str = ""
 
     @property
-    def status(self) -> str:
+    def status(self) -> ItemStatus:
         if self.entry.problem:
-            return "failed" if self.entry.unreadable else "unsupported"
+            return ItemStatus.FAILED if self.entry.unreadable else ItemStatus.UNSUPPORTED
         if self.failure or (self.done is not None and self.done.report is None):
-            return "failed"
-        return self.done.report.verdict if self.done is not None else "pending"
+            return ItemStatus.FAILED
+        return ItemStatus(self.done.report.verdict) if self.done is not None else ItemStatus.PENDING
 
     @property
     def reason(self) -> str:
@@ -85,7 +86,7 @@ class Conversion:
 
     @property
     def failed(self) -> list[Item]:
-        return [i for i in self.items if i.status in ("failed", "unsupported")]
+        return [i for i in self.items if i.status in (ItemStatus.FAILED, ItemStatus.UNSUPPORTED)]
 
 
 def slot_of(name: str) -> str:
@@ -230,7 +231,7 @@ def convert(entries: list[Entry], dest: Destination, out: str | Path, registry: 
         result = Conversion(items, dest, where=workers.where)
         _write_libraries(result, folder, formats)
         result.seconds = time.perf_counter() - t0
-        write_json_atomic(folder / "convert.json", summary(result))
+        write_json_atomic(folder / "convert.json", summary(result).model_dump(mode="json"))
         write_index(folder / "index.html", result)
     return result
 
@@ -312,19 +313,19 @@ def _line(done: Done, i: int, n: int) -> str:
             + (f" (redone: {done.redone})" if done.redone else ""))
 
 
-def summary(result: Conversion) -> dict:
+def summary(result: Conversion) -> ConvertSummary:
+    """`convert.json`."""
     rows = []
     for i in result.items:
         rep = i.done.report if i.done is not None else None
-        rows.append({"name": i.entry.name, "file": i.entry.file, "status": i.status, "reason": i.reason,
-                     "slot": i.slot if rep is not None else None, "model": i.model or None, "model_why": i.why,
-                     "relative_rmse": rep.metrics.relative_rmse if rep else None,
-                     "perceptual": rep.metrics.perceptual if rep else None,
-                     "renders": rep.renders if rep else None, "seconds": rep.seconds if rep else None,
-                     "resumed": bool(i.done and i.done.resumed), "notes": i.entry.notes,
-                     "textured": i.entry.textured})
-    return {"target": result.destination.adapter, "model": result.destination.model, "materials": rows,
-            "converted": sum(i.done is not None and i.done.report is not None for i in result.items),
-            "failed": sum(r["status"] in ("failed", "unsupported") for r in rows),
-            "libraries": [p.name for p in result.libraries], "library_notes": result.library_notes,
-            "seconds": result.seconds, "ran_in": result.where}
+        rows.append(MaterialRow(name=i.entry.name, file=i.entry.file, status=i.status, reason=i.reason,
+                                slot=i.slot if rep is not None else None, model=i.model or None, model_why=i.why,
+                                relative_rmse=rep.metrics.relative_rmse if rep else None,
+                                perceptual=rep.metrics.perceptual if rep else None,
+                                renders=rep.renders if rep else None, seconds=rep.seconds if rep else None,
+                                resumed=bool(i.done and i.done.resumed), notes=i.entry.notes,
+                                textured=i.entry.textured))
+    return ConvertSummary(target=result.destination.adapter, model=result.destination.model, materials=rows,
+                          converted=sum(i.done is not None and i.done.report is not None for i in result.items),
+                          failed=len(result.failed), libraries=[p.name for p in result.libraries],
+                          library_notes=result.library_notes, seconds=result.seconds, ran_in=result.where)

@@ -8,11 +8,13 @@ from typing import TYPE_CHECKING
 
 from ..atomic import write_text_atomic
 from ..schemas import format_value
+from .records import ItemStatus
 
 if TYPE_CHECKING:
     from .convert import Conversion, Item
 
-RANK = {"failed": 0, "unsupported": 1, "unreliable": 2, "unchecked": 3, "mismatch": 4, "ok": 5, "pending": 6}
+RANK = {s: i for i, s in enumerate(ItemStatus)}
+"""Worst first: the order `ItemStatus` declares."""
 
 
 def _order(item: "Item") -> tuple:
@@ -70,7 +72,7 @@ def write_index(path: Path, result: "Conversion") -> Path:
     env = jinja2.Environment(loader=jinja2.FileSystemLoader(Path(__file__).with_name("templates")),
                              autoescape=True, undefined=jinja2.StrictUndefined)
     items = sorted(result.items, key=_order)
-    counts = {s: sum(i.status == s for i in items) for s in RANK if s != "pending"}
+    counts = {s: sum(i.status is s for i in items) for s in ItemStatus if s is not ItemStatus.PENDING}
     html = env.get_template("index.html.j2").render(
         cards=[_card(i) for i in items], counts=counts, total=len(items), destination=result.destination,
         libraries=[p.name for p in result.libraries], library_notes=result.library_notes,

@@ -8,10 +8,45 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
+from pydantic import Field
+
 from ..errors import ConfigError
 from ..job import Lookup
+from ..model import Strict
 from ..schemas import Material, ModelSpec
 from .table import Table, TableMap, outside
+
+
+LOOKUP_SCHEMA_VERSION = 1
+
+
+class TableRef(Strict):
+    name: str
+    file: str = Field(description="Where the table was read.")
+    digest: str
+    method: str = Field(description="The map that gave the parameters.")
+
+
+class TargetRef(Strict):
+    adapter: str
+    model: str
+
+
+class LookupRecord(Strict):
+    """`lookup.json`: a lookup written with `--no-render`, its parameters straight from the table."""
+
+    schema_version: int = LOOKUP_SCHEMA_VERSION
+    tool: str
+    table: TableRef
+    source: Material
+    target: TargetRef
+    params: dict[str, Any] = Field(description="The target's parameters (RGB as lists).")
+    axis_values: dict[str, Any] = Field(description="The source's values on the table's axes.")
+    expected_error: float | None = Field(description="What the table's direct fits reach about these values.")
+    outside: list[str] = Field(description="Source values outside the table's range (clamped), in words.")
+    lookup_seconds: float
+    files: list[str] = Field(description="The native material's files written beside it.")
+    textures: dict[str, Any] | None = Field(description="A textured source's record (its maps), if one.")
 
 
 @dataclass
@@ -71,7 +106,6 @@ def look_up(table: Table, tmap: TableMap, values: dict[str, Any]) -> Answer:
 def write_answer(folder, resolved, answer: Answer, adapter, table_file: str) -> list:
     """A lookup without renders: the native material and `lookup.json`, each written aside and
     moved in (`lookup.json` last)."""
-    import json
     import tempfile
     from pathlib import Path
 
@@ -98,13 +132,12 @@ def write_answer(folder, resolved, answer: Answer, adapter, table_file: str) -> 
     except OSError as exc:
         raise ConfigError(f"cannot write the native material: {why(exc)}", file=str(folder)) from None
     lk = answer.lookup
-    doc = {"tool": f"brdf-remap {__version__}", "table": {"name": lk.table, "file": table_file, "digest": lk.digest,
-                                                         "method": lk.method},
-           "source": json.loads(job.source.model_dump_json()), "target": {"adapter": job.target.adapter,
-                                                                          "model": job.target.model},
-           "params": {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()},
-           "axis_values": answer.values, "expected_error": lk.expected_error, "outside": lk.outside,
-           "lookup_seconds": answer.seconds, "files": [p.name for p in files],
-           "textures": texturing.record.model_dump(mode="json") if texturing else None}
-    files.append(write_json_atomic(Path(folder) / "lookup.json", doc))
+    doc = LookupRecord(tool=f"brdf-remap {__version__}",
+                       table=TableRef(name=lk.table, file=table_file, digest=lk.digest, method=lk.method),
+                       source=job.source, target=TargetRef(adapter=job.target.adapter, model=job.target.model),
+                       params={k: list(v) if isinstance(v, tuple) else v for k, v in params.items()},
+                       axis_values=answer.values, expected_error=lk.expected_error, outside=lk.outside,
+                       lookup_seconds=answer.seconds, files=[p.name for p in files],
+                       textures=texturing.record.model_dump(mode="json") if texturing else None)
+    files.append(write_json_atomic(Path(folder) / "lookup.json", doc.model_dump(mode="json")))
     return files

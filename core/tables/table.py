@@ -11,15 +11,15 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import Field, ValidationError, computed_field
+from pydantic import Field, computed_field
 
-from ..configio import validation_message
 from ..errors import ConfigError
 from ..model import Strict, WithDerived
 from ..scene import ProbeScene
 from .colours import Polynomial, Rows, correction_columns, corrected, gaps
 from .maps import Grid, Regressor, build
 from .outputs import ERROR, Output, assemble, target_value
+from ..versioned import JsonFormat, check_version, parse, read_json
 from .spec import Layout, TableSpec
 
 TABLE_SCHEMA_VERSION = 5
@@ -288,30 +288,18 @@ def table_file(path: str | Path) -> Path:
     return p / "table.json" if p.is_dir() else p
 
 
+TABLE_FORMAT = JsonFormat(kind="table format", reads=READS,
+                          older="build it again with `remap table build` into its folder (its stored fits are reused)",
+                          missing="not found: give a table built by `remap table build` (its folder or its table.json)",
+                          edited="was edited after it was built (its digest does not match its content): build it "
+                                 "again")
+
+
 def read_table(path: str | Path) -> Table:
     """A table file, checked: its format version and its digest (an edited table is refused)."""
     p = table_file(path)
-    try:
-        doc = json.loads(p.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ConfigError("not found: give a table built by `remap table build` (its folder or its table.json)",
-                          file=str(p)) from None
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        raise ConfigError(f"cannot read it as JSON: {exc}", file=str(p)) from None
+    doc = read_json(p, TABLE_FORMAT)
     if not isinstance(doc, dict) or "chosen" not in doc or not isinstance(doc.get("schema_version"), int):
         raise ConfigError("not a remap table (build one with `remap table build SPEC.yaml --out DIR`)", file=str(p))
-    if doc["schema_version"] not in READS:
-        newer = doc["schema_version"] > TABLE_SCHEMA_VERSION
-        raise ConfigError(f"table format {doc['schema_version']}; this brdf-remap reads "
-                          f"{' and '.join(map(str, READS))}: "
-                          + ("upgrade brdf-remap" if newer else "build it again with `remap table build` into its "
-                                                                "folder (its stored fits are reused)"), file=str(p))
-    try:
-        table = Table.model_validate(doc)
-    except ValidationError as exc:
-        field, msg = validation_message(exc)
-        raise ConfigError(msg, file=str(p), field=field) from None
-    if doc.get("digest") != table.digest:
-        raise ConfigError("was edited after it was built (its digest does not match its content): build it again",
-                          file=str(p))
-    return table
+    check_version(doc, TABLE_FORMAT, str(p))
+    return parse(doc, Table, TABLE_FORMAT, str(p), digest="digest")

@@ -20,7 +20,11 @@ FORMATS_ONLY = [*FAST, "--validate", "none"]
 
 
 def _summary(out: Path) -> dict:
-    return json.loads((out / "convert.json").read_text())
+    from brdfremap.core.library.records import ConvertSummary
+
+    doc = json.loads((out / "convert.json").read_text())
+    ConvertSummary.model_validate(doc)  # what `remap schema convert` publishes
+    return doc
 
 
 def test_a_mitsuba_scene_of_mixed_bsdfs_converts_to_one_blend_and_a_report(tmp_path, mitsuba_adapter,

@@ -60,7 +60,10 @@ def test_sweep_writes_csv_plots_and_flags_the_trimmed_point(tmp_path, mitsuba_ad
     assert ag["flagged"] == "True" and "trims" in ag["why"] and ag["target.verdict"] == "unreliable"
     assert float(ag["target.energy_scale"]) < 1.0
     assert float(ag["source.reflectivity_r"]) > 0.95
+    from brdfremap.core.experiments.table import ExperimentSummary
+
     summary = json.loads((out / "summary.json").read_text())
+    ExperimentSummary.model_validate(summary)  # what `remap schema experiment-summary` publishes
     assert summary["points"] == 4 and summary["flagged"] >= 1 and summary["renders"] > 0
     for p in sorted(rows):
         read_result(out / "points" / p / "result.json")  # every report validates against `remap schema`

@@ -78,7 +78,10 @@ def test_build_resume_and_look_up(tmp_path, mitsuba_adapter, capsys):
 
     assert main(["--table", str(out / "table.json"), "--source", str(material), "--out", str(tmp_path / "bare"),
                  "--no-render", "--quiet"]) == 0
+    from brdfremap.core.tables.lookup import LookupRecord
+
     doc = json.loads((tmp_path / "bare" / "lookup.json").read_text())
+    LookupRecord.model_validate(doc)  # what `remap schema lookup` publishes
     assert doc["params"]["alpha"] == report["params"]["alpha"] and doc["lookup_seconds"] < 0.01
     assert (tmp_path / "bare" / "material.xml").exists() and not (tmp_path / "bare" / "result.json").exists()
 

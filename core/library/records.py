@@ -1,0 +1,62 @@
+"""What a library conversion records: each material's state (`ItemStatus`: where its job stands,
+or its verdict once judged) and `convert.json` as a model (`ConvertSummary`, `remap schema convert`)."""
+
+from __future__ import annotations
+
+from enum import StrEnum
+
+from pydantic import Field
+
+from ..model import Strict
+
+CONVERT_SCHEMA_VERSION = 1
+
+
+class ItemStatus(StrEnum):
+    """A material's state in a conversion: not converted (failed, unsupported), not yet done
+    (pending), or its result's verdict. Written as its value."""
+
+    FAILED = "failed"
+    UNSUPPORTED = "unsupported"
+    UNRELIABLE = "unreliable"
+    UNCHECKED = "unchecked"
+    MISMATCH = "mismatch"
+    OK = "ok"
+    PENDING = "pending"
+
+    @property
+    def converted(self) -> bool:
+        """Whether it has a result (whatever its verdict)."""
+        return self not in (ItemStatus.FAILED, ItemStatus.UNSUPPORTED, ItemStatus.PENDING)
+
+
+class MaterialRow(Strict):
+    name: str = Field(description="The material's name in its file.")
+    file: str
+    status: ItemStatus
+    reason: str = Field(description="Why it failed or is unsupported ('' otherwise).")
+    slot: str | None = Field(description="Its folder under materials/ (None: no result).")
+    model: str | None = Field(description="The target model.")
+    model_why: str = Field(description="Why that model, where the adapter chose it.")
+    relative_rmse: float | None
+    perceptual: float | None
+    renders: int | None
+    seconds: float | None
+    resumed: bool = Field(description="Its result was found from an earlier run.")
+    notes: list[str]
+    textured: list[str]
+
+
+class ConvertSummary(Strict):
+    """`convert.json`: every material of a conversion, and what came of it."""
+
+    schema_version: int = CONVERT_SCHEMA_VERSION
+    target: str = Field(description="The target adapter.")
+    model: str | None = Field(description="The target model asked for (None: the adapter chose per material).")
+    materials: list[MaterialRow]
+    converted: int = Field(description="Materials with a result, whatever its verdict.")
+    failed: int = Field(description="Materials failed or unsupported.")
+    libraries: list[str] = Field(description="The native library files written.")
+    library_notes: list[str]
+    seconds: float
+    ran_in: str = Field(description="Where the jobs ran (this machine's processes, a Dask scheduler).")
