@@ -7,7 +7,7 @@ import yaml
 from brdfremap.core.scene import ProbeScene
 from brdfremap.core.tables import Layout, load_table_spec
 from brdfremap.core.tables.outputs import outputs_for
-from brdfremap.core.tables.table import TABLE_SCHEMA_VERSION, BuildRecord, PointRecord, Table
+from brdfremap.core.tables.table import TABLE_SCHEMA_VERSION, BuildRecord, PointRecord, PointVerdict, Table
 
 SPEC = {
     "kind": "table", "name": "t",
@@ -36,7 +36,7 @@ def synthetic_table(tmp_path, axes: dict | None = None) -> Table:
                   "specular_reflectance": [0.9 * c for c in v["specular_reflectance"]], "alpha": 1.1 * v["alpha"]}
         points.append(PointRecord(id=f"g{i}", index=list(idx), values=v, params=params, error=0.01 + v["alpha"] / 10,
                                   verdict="ok", used=True))
-    points[5] = points[5].model_copy(update={"used": False, "left_out": "not at a minimum", "verdict": "unreliable",
+    points[5] = points[5].model_copy(update={"used": False, "left_out": "not at a minimum", "verdict": PointVerdict.UNRELIABLE,
                                              "params": {**points[5].params, "alpha": 0.9}})
     table = Table(schema_version=TABLE_SCHEMA_VERSION, tool="test", name="synthetic", spec=spec, scene=ProbeScene(),
                   source_kinds=layout.kinds, source_params={"distribution": "beckmann", "material": "none",

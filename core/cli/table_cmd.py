@@ -70,11 +70,12 @@ def _summary(t) -> None:
     print(f"table          {t.name}: {s.source.adapter}:{s.source.model} -> {s.target.adapter}:{s.target.model}")
     print(f"grid           {axes} = {b.points} points; mapped: "
           f"{', '.join(dict.fromkeys(o.param for o in t.outputs if o.kind != 'error'))}")
-    cliffs = sum(1 for pt in t.points if pt.left_out.startswith("a cliff"))
     continued = sum(pt.continued for pt in t.points)
     remedied = sum(bool(pt.remedy) for pt in t.points)
+    why = (f"{b.left_out - b.cliffs} whose fit is in question, {b.cliffs} cliffs" if b.cliffs is not None else
+           "built before cliffs were counted apart")
     print(f"fits           {b.used} used, {b.flagged} flagged unreliable, {b.left_out} left out of the regression "
-          f"({b.left_out - cliffs} whose fit is in question, {cliffs} cliffs)"
+          f"({why})"
           + (f"; {remedied} refitted as their findings advised" if remedied else "")
           + (f"; {continued} continued from their neighbours" if t.spec.continuation or t.spec.follow else "")
           + (f" along {', '.join(t.spec.follow)}" if t.spec.follow else ""))

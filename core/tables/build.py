@@ -106,21 +106,19 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
     t0 = time.perf_counter()
     p = plan(spec, file, registry)
     scene = spec.scene.scene(Path(file).resolve().parent)
-    grid_tasks = [point_task(p, registry, f"points/g{i:04d}", v, f"g{i:04d} {shown(v)}", scene, spec.options)
-                  for i, (_, v) in enumerate(p.grid)]
-    held_tasks = [point_task(p, registry, f"holdout/h{i:03d}", v, f"h{i:03d} {shown(v)}", scene, spec.options)
-                  for i, v in enumerate(p.held)]
-    colour_tasks = [point_task(p, registry, f"colours/c{i:04d}", v, f"c{i:04d} {shown(v)}", scene, spec.options)
-                    for i, v in enumerate(p.colours)]  # their fits after the grid's: a rerun resumes the grid first
+    grid_ids, grid_tasks = _tasks(p, registry, scene, "points", "g{:04d}", [v for _, v in p.grid])
+    held_ids, held_tasks = _tasks(p, registry, scene, "holdout", "h{:03d}", p.held)
+    # The coloured points' fits after the grid's: a rerun resumes the grid first.
+    colour_ids, colour_tasks = _tasks(p, registry, scene, "colours", "c{:04d}", p.colours)
     with owned(out) as folder:
         runner = Runner(Store(folder), workers, renderer_files=tuple(registry.loaded_files()), quiet=quiet,
                         stop_on_error=False, line=_line)
         done = runner.run(grid_tasks + held_tasks + colour_tasks)
         n, m = len(grid_tasks), len(grid_tasks) + len(held_tasks)
         grid_done, held_done, colour_done = done[:n], done[n:m], done[m:]
-        firsts = [record(t.slot.split("/")[1], v, d, idx) for t, (idx, v), d in zip(grid_tasks, p.grid, grid_done)]
+        firsts = [record(k, v, d, idx) for k, (idx, v), d in zip(grid_ids, p.grid, grid_done)]
         points = _refitted(p, registry, runner, scene, firsts)
-        first_colours = [record(t.slot.split("/")[1], v, d) for t, v, d in zip(colour_tasks, p.colours, colour_done)]
+        first_colours = [record(k, v, d) for k, v, d in zip(colour_ids, p.colours, colour_done)]
         colours = remedy_points(p, registry, runner, scene, first_colours, "colours")
         need = len(p.layout.dims) + 2
         if sum(pt.used for pt in points) < need:
@@ -128,7 +126,7 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
             raise ConfigError(f"{sum(pt.used for pt in points)} of {len(points)} grid points gave a fit the map can "
                               f"use, and a map over {need - 2} dimensions needs {need}: see points.csv for why",
                               file=file)
-        held = [record(t.slot.split("/")[1], v, d) for t, v, d in zip(held_tasks, p.held, held_done)]
+        held = [record(k, v, d) for k, v, d in zip(held_ids, p.held, held_done)]
         first = (next((d.report for d, pt in zip(grid_done, points) if pt.used and d.report is not None), None)
                  or next(d.report for d in grid_done if d.report is not None))  # a followed point's may have failed
         draft = _draft(p, file, spec, points, held, fitted_names(p, points, grid_done), first, scene
@@ -138,7 +136,9 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
             draft = draft.model_copy(update={"colours": follow_colours(p, registry, runner, draft)})
         if spec.continuation:
             draft = draft.model_copy(update={"points": continue_points(p, registry, runner, draft)})
-        draft = draft.model_copy(update={"points": leave_out_cliffs(draft)})
+        kept = leave_out_cliffs(draft)
+        cliffs = sum(a.used and not b.used for a, b in zip(draft.points, kept))
+        draft = draft.model_copy(update={"points": kept})
         draft = draft.model_copy(update={"candidates": fit_candidates(draft)})
         if all(c.problem for c in draft.candidates.values()):
             raise ConfigError("no map could be fitted to the grid: " + "; ".join(
@@ -152,14 +152,21 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
         colour_renders, colour_seconds = refits_account(folder, colours, "colours", follow=tuple(spec.follow))
         table = table.model_copy(update={"build": BuildRecord(
             points=len(final), used=sum(pt.used for pt in final),
-            flagged=sum(pt.verdict in ("unreliable", "failed") for pt in final),
-            left_out=sum(not pt.used for pt in final), holdout=len(held),
+            flagged=sum(pt.verdict.flagged for pt in final),
+            left_out=sum(not pt.used for pt in final), cliffs=cliffs, holdout=len(held),
             renders=sum(pt.renders for pt in firsts + held + first_colours) + renders + refit_renders + colour_renders,
             seconds=sum(pt.seconds for pt in firsts + held + first_colours) + seconds + refit_seconds + colour_seconds,
             wall_seconds=time.perf_counter() - t0, ran_in=workers.where)})
         write_table(folder / "table.json", table)
         write_points_csv(folder / "points.csv", table)
     return table
+
+
+def _tasks(p: Plan, registry: AdapterRegistry, scene, folder: str, ids: str, values: list) -> tuple[list, list]:
+    """The points' ids and their fits' tasks, each stored under ``folder``/its id."""
+    names = [ids.format(i) for i in range(len(values))]
+    return names, [point_task(p, registry, f"{folder}/{k}", v, f"{k} {shown(v)}", scene, p.spec.options)
+                   for k, v in zip(names, values)]
 
 
 def _refitted(p: Plan, registry: AdapterRegistry, runner: Runner, scene, firsts: list) -> list:

@@ -7,14 +7,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..errors import ConfigError
+from ..findings import CannotResolve, ImagePrecision, NoEffect, NotAtMinimum, RendererAlters
 from ..job import Job, Lookup, Where, model_of, resolve
 from ..plugins import AdapterRegistry
 from ..runner import Done, Task
 from ..schemas import Material, ModelSpec
 from .spec import Layout, TableSpec
-from .table import PointRecord
+from .table import PointRecord, PointVerdict
 
-QUESTIONED = frozenset({"not_at_minimum", "cannot_resolve", "image_precision", "renderer_alters", "no_effect"})
+QUESTIONED = (NotAtMinimum, CannotResolve, ImagePrecision, RendererAlters, NoEffect)
 """Findings that put the fit itself in question (it may not be the best this target does): such a
 point is left out of the regression. A mismatch, a held-out light over the threshold, a bound the
 fit presses on, parameters that trade off: the fit is still the closest the target gets, and kept."""
@@ -112,10 +113,11 @@ def record(point_id: str, values: dict, done: Done, index: tuple[int, ...] = ())
     """What the table keeps of one fit, and whether the map may use it."""
     r = done.report
     if r is None:
-        return PointRecord(id=point_id, index=list(index), values=values, params=None, error=None, verdict="failed",
-                           reason=done.error, used=False, left_out=f"the fit failed: {done.error}")
+        return PointRecord(id=point_id, index=list(index), values=values, params=None, error=None,
+                           verdict=PointVerdict.FAILED, reason=done.error, used=False,
+                           left_out=f"the fit failed: {done.error}")
     kinds = [f.kind for f in r.findings if f.severity == "unreliable"]
-    questioned = [f.message for f in r.findings if f.severity == "unreliable" and f.kind in QUESTIONED]
+    questioned = [f.message for f in r.findings if f.severity == "unreliable" and isinstance(f, QUESTIONED)]
     return PointRecord(id=point_id, index=list(index), values=values, params=dict(r.params),
                        error=r.metrics.relative_rmse, noise_floor=r.metrics.noise_floor, verdict=r.verdict,
                        reason="" if r.reliable else r.reason, findings=kinds, used=not questioned,

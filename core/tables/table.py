@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+from enum import StrEnum
 from pathlib import Path
 from typing import Any, Literal
 
@@ -32,6 +33,21 @@ evenly spaced ones and are read as they are."""
 READS = (2, 3, 4, 5)
 
 
+class PointVerdict(StrEnum):
+    """A grid point's verdict: its fit's (`Verdict.status`), or failed (no fit). Written as its value."""
+
+    OK = "ok"
+    MISMATCH = "mismatch"
+    UNCHECKED = "unchecked"
+    UNRELIABLE = "unreliable"
+    FAILED = "failed"
+
+    @property
+    def flagged(self) -> bool:
+        """Its fit is not to be relied on: unreliable, or no fit at all."""
+        return self in (PointVerdict.UNRELIABLE, PointVerdict.FAILED)
+
+
 class PointRecord(Strict):
     """One fit of the table: a grid point or a held-out material."""
 
@@ -41,7 +57,7 @@ class PointRecord(Strict):
     params: dict[str, Any] | None = Field(description="The fitted target parameters (None: the fit failed).")
     error: float | None = Field(description="Relative RMSE of the fit.")
     noise_floor: float | None = None
-    verdict: str = Field(description="ok, mismatch, unreliable, or failed.")
+    verdict: PointVerdict = Field(description="ok, mismatch, unchecked, unreliable, or failed.")
     reason: str = Field("", description="The verdict's findings in words (or the failure).")
     findings: list[str] = Field(default_factory=list, description="The kinds of the findings of severity unreliable.")
     used: bool = Field(description="Whether the map was fitted to it.")
@@ -90,6 +106,9 @@ class BuildRecord(Strict):
     used: int
     flagged: int = Field(description="Grid points whose verdict is unreliable, or whose fit failed.")
     left_out: int = Field(description="Grid points left out of the regression (their fit itself is in question).")
+    cliffs: int | None = Field(None, description="Of those, the points left out as cliffs (their fit found another "
+                                                 "optimum than their neighbours'); None: built before they were "
+                                                 "counted.")
     holdout: int
     renders: int = Field(description="Target renders of every fit and check, all runs.")
     seconds: float = Field(description="Sum of the jobs' own times, all runs.")

@@ -502,6 +502,7 @@ def test_path_following_refits_each_step_from_its_predecessor_as_it_now_stands(t
     from types import SimpleNamespace
 
     from brdfremap.core.runner import Done
+    from brdfremap.core.findings import NotAtMinimum
     from brdfremap.core.tables.refits import follow_points
     from brdfremap.core.tables.table import PointRecord
 
@@ -522,7 +523,7 @@ def test_path_following_refits_each_step_from_its_predecessor_as_it_now_stands(t
         def run(self, tasks):
             waves.append(tasks)
             return [Done(task=t, resumed=False, report=SimpleNamespace(
-                findings=[SimpleNamespace(kind="not_at_minimum", severity="unreliable", message="short")]
+                findings=[NotAtMinimum(predicted=0.04)]
                 if t.slot == f"points/g{questioned}/{axis}-up" else [],
                 params={"alpha": t.job.start["alpha"] + 0.01},
                 metrics=SimpleNamespace(relative_rmse=0.09 if t.slot.endswith("-down") else 0.05, noise_floor=0.01),
