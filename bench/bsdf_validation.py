@@ -1,6 +1,6 @@
 """Validation figures of the Mitsuba 0.5 models (ward, phong, ashikhmin_shirley plugins).
 
-    python bench/bsdf_validation.py > docs/bsdf-validation.txt
+    python bench/bsdf_validation.py > docs/measurements/bsdf-validation.txt
 
 Prints, per model and parameter set: the chi-square p-value of sampling against the pdf at
 three incident directions (Mitsuba's own test; accepted above 0.01), the largest relative

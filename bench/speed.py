@@ -1,6 +1,6 @@
 """Remap speed and quality against the baselines, measured side by side in one run.
 
-    python bench/speed.py [--quick] [--subset] [--out docs/speed-bench.md]
+    python bench/speed.py [--quick] [--subset] [--out docs/measurements/speed-bench.md]
 
 For each case (a source material and a target model):
   paper     the paper-faithful baseline: one-stage TRF at 512² from the target's defaults, a
