@@ -17,7 +17,7 @@ import numpy as np
 from .imageio import HALF_EPS
 from .metrics import beyond_noise, eight_bit, relative_rmse
 from .scene import EnvironmentLight, PointLight, ProbeScene
-from .testing import analytic_glass, analytic_lambert, scene_for, sphere_hits
+from .analytic import analytic_glass, analytic_lambert, scene_for, sphere_hits
 
 SCENE = ProbeScene(resolution=48, spp=16)
 CALIBRATION = ProbeScene(resolution=64, spp=64)
