@@ -110,3 +110,39 @@ def test_no_function_over_sixty_lines():
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
             and node.end_lineno - node.lineno + 1 > LONGEST]
     assert not long, long
+
+
+ROOMS = (
+    ("data", ("account", "appearance", "atomic", "configio", "environment", "errors", "findings", "imageio",
+              "metrics", "model", "scene", "schemas", "settings", "textures", "scratch", "versioned")),
+    ("plugin host", ("", "plugins", "hookspecs", "protocol", "analytic", "check", "testing")),
+    ("engine", ("engine",)),
+    ("job", ("job", "renders", "fitscene", "validation", "agreement", "execute", "report", "texturing", "cache")),
+    ("run", ("store", "runner", "executors", "workerproc", "interrupt")),
+    ("library, tables, experiments", ("library", "tables", "experiments")),
+    ("cli", ("cli",)),
+)
+"""The rooms of docs/architecture.md, lowest first: a module imports from its own room and those below."""
+UPWARD = {("brdfremap.core.texturing", "brdfremap.core.tables"): "a textured job is remapped through a table",
+          ("brdfremap.core.texturing", "brdfremap.core.tables.texels"): "a textured job is remapped through a table"}
+"""The imports that go up, each with its reason."""
+
+
+def _room(module: str) -> int:
+    parts = module.split(".")
+    if parts[1] == "adapters":
+        return len(ROOMS)
+    first = parts[2] if len(parts) > 2 else ""
+    room = next((i for i, (_, names) in enumerate(ROOMS) if first in names), None)
+    assert room is not None, f"{module}: in no room of ROOMS (add it to the room of docs/architecture.md it is in)"
+    return room
+
+
+def test_core_imports_only_downward_and_no_adapter_imports_the_engine():
+    graph = _graph()
+    upward = sorted((a, b) for a, outs in graph.items() for b in outs
+                    if _room(b) > _room(a) and (a, b) not in UPWARD)
+    assert not upward, [f"{a} ({ROOMS[_room(a)][0]}) -> {b} ({ROOMS[_room(b)][0]})" for a, b in upward]
+    engine = sorted((a, b) for a, outs in graph.items() for b in outs
+                    if a.startswith("brdfremap.adapters") and b.startswith("brdfremap.core.engine"))
+    assert not engine, engine
