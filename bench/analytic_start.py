@@ -20,8 +20,8 @@ import time
 import speed
 from common import job_for, open_adapters, registry
 
-from brdfremap.core.execute import execute
-from brdfremap.core.job import resolve
+from brdfremap.core.job.execute import execute
+from brdfremap.core.job.job import resolve
 
 VARIANTS = {"default (informed, 4 starts)": {}, "informed, 1 start": {"starts": 1},
             "from the defaults": {"start": "defaults"}}

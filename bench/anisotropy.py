@@ -14,10 +14,10 @@ import time
 
 import numpy as np
 
-from brdfremap.core.appearance import anisotropy_from_alphas
-from brdfremap.core.metrics import relative_rmse
-from brdfremap.core.plugins import collect_adapters
-from brdfremap.core.scene import PointLight, ProbeScene
+from brdfremap.core.data.appearance import anisotropy_from_alphas
+from brdfremap.core.data.metrics import relative_rmse
+from brdfremap.core.host.plugins import collect_adapters
+from brdfremap.core.data.scene import PointLight, ProbeScene
 
 COATED = {"base_color": [0.9, 0.6, 0.5], "metallic": 0.95, "clearcoat": 0.99, "clearcoat_gloss": 0.999}
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from functools import lru_cache
 
-from brdfremap.core.appearance import conductor_f0
+from brdfremap.core.data.appearance import conductor_f0
 
 
 @lru_cache(maxsize=None)

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from common import open_adapters, registry
 
-from brdfremap.core.metrics import relative_rmse
-from brdfremap.core.scene import ProbeScene
+from brdfremap.core.data.metrics import relative_rmse
+from brdfremap.core.data.scene import ProbeScene
 from brdfremap.core.testing import analytic_lambert, sphere_hits
 
 WHITE = {"mitsuba": ("diffuse", {"reflectance": 0.8}), "cycles": ("diffuse", {"color": 0.8})}

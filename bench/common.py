@@ -8,12 +8,12 @@ from pathlib import Path
 from types import SimpleNamespace
 
 from brdfremap.core.engine import Tuning
-from brdfremap.core.execute import AdapterPool, Outcome, execute
-from brdfremap.core.job import Job, Target, resolve
-from brdfremap.core.plugins import collect_adapters
-from brdfremap.core.scene import ProbeScene
-from brdfremap.core.schemas import Material, load_material, parse_fix
-from brdfremap.core.settings import Settings
+from brdfremap.core.job.execute import AdapterPool, Outcome, execute
+from brdfremap.core.job.job import Job, Target, resolve
+from brdfremap.core.host.plugins import collect_adapters
+from brdfremap.core.data.scene import ProbeScene
+from brdfremap.core.data.schemas import Material, load_material, parse_fix
+from brdfremap.core.data.settings import Settings
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -23,7 +23,7 @@ def split_options(options: dict) -> tuple[Settings, Tuning]:
     engine's `Tuning`; an unknown name is an error."""
     unknown = set(options) - set(Settings.model_fields) - set(Tuning.model_fields)
     if unknown:
-        raise SystemExit(f"unknown option(s) {sorted(unknown)}: see core/settings.py and core/engine/tuning.py")
+        raise SystemExit(f"unknown option(s) {sorted(unknown)}: see core/data/settings.py and core/engine/tuning.py")
     return (Settings(**{k: v for k, v in options.items() if k in Settings.model_fields}),
             Tuning(**{k: v for k, v in options.items() if k in Tuning.model_fields}))
 

@@ -14,8 +14,8 @@ from pathlib import Path
 
 from common import ROOT, figures, median, open_adapters, registry, remap_once
 
-from brdfremap.core.atomic import write_text_atomic
-from brdfremap.core.schemas import Material
+from brdfremap.core.data.atomic import write_text_atomic
+from brdfremap.core.data.schemas import Material
 
 PRESETS = ("Au", "Ag", "Cu", "Al", "Cr")
 ALPHAS = (0.05, 0.1, 0.2, 0.4)

@@ -16,7 +16,7 @@ import statistics
 import time
 
 from brdfremap.adapters.cycles.worker import BlenderState
-from brdfremap.core.scene import ProbeScene
+from brdfremap.core.data.scene import ProbeScene
 
 PARAMS = {"distribution": "multi_ggx", "base_color": [0.9, 0.6, 0.3], "metallic": 1.0, "roughness": 0.3,
           "ior": 1.5, "specular_ior_level": 0.5, "specular_tint": [1, 1, 1], "coat_weight": 0.0,

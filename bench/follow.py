@@ -16,10 +16,10 @@ import numpy as np
 
 
 def fit(roughness: float, grey: float, ior: float, start: dict | None = None) -> tuple[dict, float]:
-    from brdfremap.core.execute import run_job
-    from brdfremap.core.job import Job, Target
-    from brdfremap.core.schemas import Material
-    from brdfremap.core.settings import Settings
+    from brdfremap.core.job.execute import run_job
+    from brdfremap.core.job.job import Job, Target
+    from brdfremap.core.data.schemas import Material
+    from brdfremap.core.data.settings import Settings
 
     source = Material(adapter="cycles", model="principled", params={
         "distribution": "multi_ggx", "base_color": [grey] * 3, "metallic": 0.0, "roughness": roughness, "ior": ior})

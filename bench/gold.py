@@ -19,7 +19,7 @@ import sys
 from common import ROOT, open_adapters, registry, remap_once
 from speed import evaluate, run_case
 
-from brdfremap.core.schemas import load_material
+from brdfremap.core.data.schemas import load_material
 
 TARGET = "cycles:principled"
 

@@ -3,7 +3,7 @@ analytic radiance (`core.testing.analytic_lambert`) and Mitsuba against Cycles.
 
     python bench/lights.py [--resolution 128] [--spp 256] [--out docs/lights.md]
 
-Each light of the held-out validation set (`core.validation`) and the probe's own, two point
+Each light of the held-out validation set (`core.job.validation`) and the probe's own, two point
 lights at once, a constant environment and the built-in studio are rendered at the given
 samples (environments at four times as many). Errors are relative RMSE over the pixels whose
 whole footprint is on the sphere (a renderer box-filters the silhouette, the analytic image does
@@ -16,11 +16,11 @@ import time
 from pathlib import Path
 
 import numpy as np
-from brdfremap.core.metrics import relative_rmse
-from brdfremap.core.plugins import collect_adapters
-from brdfremap.core.scene import EnvironmentLight, PointLight, ProbeScene
+from brdfremap.core.data.metrics import relative_rmse
+from brdfremap.core.host.plugins import collect_adapters
+from brdfremap.core.data.scene import EnvironmentLight, PointLight, ProbeScene
 from brdfremap.core.testing import analytic_lambert, sphere_hits
-from brdfremap.core.validation import CONDITIONS
+from brdfremap.core.job.validation import CONDITIONS
 
 WHITE = {"mitsuba": ("diffuse", {"reflectance": 0.8}), "cycles": ("diffuse", {"color": 0.8})}
 

@@ -18,7 +18,7 @@ sys.path.insert(0, str(ROOT.parent))
 
 def main() -> None:
     from brdfremap.adapters.subprocess.adapter import adapter_class
-    from brdfremap.core.scene import ProbeScene
+    from brdfremap.core.data.scene import ProbeScene
 
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--renders", type=int, default=8)

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 from common import open_adapters, registry
 
-from brdfremap.core.scene import ProbeScene
+from brdfremap.core.data.scene import ProbeScene
 
 CASES = {("mitsuba", "roughconductor"): ({"alpha": 0.2}, "alpha"),
          ("mitsuba", "roughplastic"): ({"alpha": 0.2, "diffuse_reflectance": (0.5, 0.2, 0.1)}, "alpha"),

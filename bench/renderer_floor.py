@@ -1,5 +1,5 @@
 """How far two adapters' white Lambertians differ under each held-out light: the floor a material's
-held-out error is judged beyond (`core.agreement.calibration_floors`).
+held-out error is judged beyond (`core.job.agreement.calibration_floors`).
 
     python bench/renderer_floor.py [--source mitsuba] [--target cycles] [--spp 16] [--metal smooth|rough]
 
@@ -15,9 +15,9 @@ import argparse
 
 from common import open_adapters, registry
 
-from brdfremap.core.agreement import _MEASURED, calibration_floors
-from brdfremap.core.scene import ProbeScene
-from brdfremap.core.validation import held_out_scenes
+from brdfremap.core.job.agreement import _MEASURED, calibration_floors
+from brdfremap.core.data.scene import ProbeScene
+from brdfremap.core.job.validation import held_out_scenes
 
 
 def main() -> int:

@@ -20,9 +20,9 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from brdfremap.core.metrics import relative_rmse
-from brdfremap.core.plugins import collect_adapters
-from brdfremap.core.scene import EnvironmentLight, ProbeScene
+from brdfremap.core.data.metrics import relative_rmse
+from brdfremap.core.host.plugins import collect_adapters
+from brdfremap.core.data.scene import EnvironmentLight, ProbeScene
 from brdfremap.core.testing import sphere_hits
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -32,10 +32,10 @@ from pathlib import Path
 import baselines
 from common import ROOT, median, open_adapters, registry, remap_once
 
-from brdfremap.core.atomic import write_json_atomic, write_text_atomic
-from brdfremap.core.metrics import delta_e_itp, relative_rmse
-from brdfremap.core.scene import ProbeScene
-from brdfremap.core.schemas import Material, parse_fix
+from brdfremap.core.data.atomic import write_json_atomic, write_text_atomic
+from brdfremap.core.data.metrics import delta_e_itp, relative_rmse
+from brdfremap.core.data.scene import ProbeScene
+from brdfremap.core.data.schemas import Material, parse_fix
 
 EVAL = ProbeScene(resolution=128, spp=64, seed=7)
 DEFAULT = ProbeScene()

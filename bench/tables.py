@@ -32,13 +32,13 @@ ACCURACY_SEED = 1000
 
 
 def accuracy(args) -> None:
-    from brdfremap.core.execute import adapter_pool
-    from brdfremap.core.executors import workers
-    from brdfremap.core.job import Job, resolve
-    from brdfremap.core.plugins import collect_adapters
-    from brdfremap.core.runner import Runner, Task
-    from brdfremap.core.schemas import Material
-    from brdfremap.core.store import Store
+    from brdfremap.core.job.execute import adapter_pool
+    from brdfremap.core.run.executors import workers
+    from brdfremap.core.job.job import Job, resolve
+    from brdfremap.core.host.plugins import collect_adapters
+    from brdfremap.core.run.runner import Runner, Task
+    from brdfremap.core.data.schemas import Material
+    from brdfremap.core.run.store import Store
     from brdfremap.core.tables import TableMap, read_table
     from brdfremap.core.tables.lookup import look_up
 
@@ -134,10 +134,10 @@ def speed(args) -> None:
 
 def texture_set(table, tmap, n: int) -> None:
     """A texture set of n² texels per input, written as files, read, remapped and its maps encoded."""
-    from brdfremap.core.plugins import collect_adapters
-    from brdfremap.core.schemas import Material
+    from brdfremap.core.host.plugins import collect_adapters
+    from brdfremap.core.data.schemas import Material
     from brdfremap.core.tables.texels import read_inputs, remap_texels
-    from brdfremap.core.textures import Texture, encode, kind_of_file, texture
+    from brdfremap.core.data.textures import Texture, encode, kind_of_file, texture
 
     spec = table.spec
     src_spec = collect_adapters().get(spec.source.adapter).models[spec.source.model]

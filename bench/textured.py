@@ -7,7 +7,7 @@ filtering: each texel one material) is remapped two ways: through the table (eve
 and by a direct fit of each texel's uniform material (SIZE² ordinary jobs, stored in DIR: an
 interrupted run resumes). Both target texture sets are rendered on the probe sphere by the target's
 renderer and compared with the textured source rendered by its own, under the table's scene
-lights and under the studio environment (the textured check's two conditions, `core.texturing`).
+lights and under the studio environment (the textured check's two conditions, `core.job.texturing`).
 Prints each error with its noise floor, and the per-texel errors of the uniform materials."""
 
 from __future__ import annotations
@@ -31,9 +31,9 @@ def main() -> None:
     p.add_argument("--seed", type=int, default=5)
     args = p.parse_args()
 
-    from brdfremap.core.execute import adapter_pool
-    from brdfremap.core.executors import workers
-    from brdfremap.core.plugins import collect_adapters
+    from brdfremap.core.job.execute import adapter_pool
+    from brdfremap.core.run.executors import workers
+    from brdfremap.core.host.plugins import collect_adapters
     from brdfremap.core.tables import TableMap, read_table
 
     t0 = time.perf_counter()
@@ -66,10 +66,10 @@ def _drawn(table, registry, count: int, seed: int) -> tuple[list[dict], dict]:
 
 def _fit_each_texel(table, tmap, registry, w, drawn, out):
     """Each texel's uniform material fitted directly, and looked up (ordinary jobs, resumable)."""
-    from brdfremap.core.job import Job, resolve
-    from brdfremap.core.runner import Runner, Task
-    from brdfremap.core.schemas import Material
-    from brdfremap.core.store import Store
+    from brdfremap.core.job.job import Job, resolve
+    from brdfremap.core.run.runner import Runner, Task
+    from brdfremap.core.data.schemas import Material
+    from brdfremap.core.run.store import Store
     from brdfremap.core.tables.lookup import look_up
 
     spec = table.spec
@@ -113,7 +113,7 @@ def _target_maps(table, tmap, registry, src_maps, fits, n):
 
 def _render_and_compare(table, adapters, registry, src_maps, table_maps, fitted_maps):
     """Both target texture sets and the source's, each by its renderer, under the check's conditions."""
-    from brdfremap.core.metrics import relative_rmse
+    from brdfremap.core.data.metrics import relative_rmse
 
     spec = table.spec
     tgt_spec = registry.get(spec.target.adapter).models[spec.target.model]
@@ -159,8 +159,8 @@ def _means(maps: dict) -> dict:
 
 
 def _conditions(scene):
-    from brdfremap.core.scene import EnvironmentLight
-    from brdfremap.core.texturing import CHECK_RESOLUTION, CHECK_SPP
+    from brdfremap.core.data.scene import EnvironmentLight
+    from brdfremap.core.job.texturing import CHECK_RESOLUTION, CHECK_SPP
 
     first = scene.view_scenes()[0]
     spp = max(CHECK_SPP, scene.spp * 4)
@@ -170,8 +170,8 @@ def _conditions(scene):
 
 
 def _pair(adapter, model, params, maps, scene, offset):
-    from brdfremap.core.metrics import relative_rmse
-    from brdfremap.core.textures import TextureMap
+    from brdfremap.core.data.metrics import relative_rmse
+    from brdfremap.core.data.textures import TextureMap
 
     tm = {k: TextureMap(np.ascontiguousarray(v, np.float32), "nearest") for k, v in maps.items()}
     a, b = (adapter.render_textured(model, dict(params), tm, scene.with_(seed=scene.seed + offset + k))

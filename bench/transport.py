@@ -17,9 +17,9 @@ import argparse
 import time
 
 import numpy as np
-from brdfremap.core.metrics import beyond_noise, relative_rmse
-from brdfremap.core.plugins import collect_adapters
-from brdfremap.core.scene import EnvironmentLight, PointLight, ProbeScene
+from brdfremap.core.data.metrics import beyond_noise, relative_rmse
+from brdfremap.core.host.plugins import collect_adapters
+from brdfremap.core.data.scene import EnvironmentLight, PointLight, ProbeScene
 from brdfremap.core.testing import analytic_glass, sphere_hits
 
 LIGHTS = {"probe (point light)": [PointLight()],

@@ -6,7 +6,7 @@
 
 `run` fits each case with the `remap` command of a source tree (``--tree``: a folder holding the
 ``brdfremap`` package of another version, put first on PYTHONPATH; default this checkout), then
-renders the source and the fitted target under the held-out conditions of `core.validation`
+renders the source and the fitted target under the held-out conditions of `core.job.validation`
 (grazing, rim and headlight point lights, the studio environment) with *this* checkout, so two
 versions are judged by one yardstick. It also renders the fit's start at the scene (is any result
 worse than where it began?). `compare` prints both runs side by side, the median and worst ratio
@@ -92,8 +92,8 @@ def fit(tree: str | None, case: tuple, work: Path, extra: list[str] = ()) -> dic
 
 
 def _renderers(pool, case: tuple):
-    from brdfremap.core.renders import CachedRenderer
-    from brdfremap.core.scene import ProbeScene
+    from brdfremap.core.job.renders import CachedRenderer
+    from brdfremap.core.data.scene import ProbeScene
 
     name, source, adapter, model, fix = case
     scene = ProbeScene()
@@ -106,14 +106,14 @@ def _renderers(pool, case: tuple):
 
 def held_out(pool, case: tuple, params: dict, moved: bool) -> dict:
     """A fitted target against the source: the probe at 16 spp (with its floor from a second
-    seed) and each held-out condition, by this checkout's `core.validation`. ``moved``: the tool
+    seed) and each held-out condition, by this checkout's `core.job.validation`. ``moved``: the tool
     fitted elsewhere (its report's `fit_scene`); its lights are then found again as the tool finds
-    them (`core.fitscene`, a few source renders), so that where the fit ran under the studio the
+    them (`core.job.fitscene`, a few source renders), so that where the fit ran under the studio the
     held-out studio is turned, as in the tool's own report."""
-    from brdfremap.core.fitscene import choose
-    from brdfremap.core.metrics import relative_rmse
-    from brdfremap.core.settings import Settings
-    from brdfremap.core.validation import validate
+    from brdfremap.core.job.fitscene import choose
+    from brdfremap.core.data.metrics import relative_rmse
+    from brdfremap.core.data.settings import Settings
+    from brdfremap.core.job.validation import validate
 
     scene, s_params, src, tgt, t_spec = _renderers(pool, case)
     fitted = t_spec.complete(params)
@@ -131,7 +131,7 @@ def held_out(pool, case: tuple, params: dict, moved: bool) -> dict:
 def moved(doc: dict) -> bool:
     """Whether the tool fitted elsewhere than the job's scene (more samples, the studio): its fit
     scene's first view differs from the job's (a back light's view added below it is not a move)."""
-    from brdfremap.core.scene import ProbeScene
+    from brdfremap.core.data.scene import ProbeScene
 
     fs = doc.get("fit_scene")
     if not fs:
@@ -142,7 +142,7 @@ def moved(doc: dict) -> bool:
 
 def evaluate(pool, case: tuple, doc: dict) -> dict:
     """The fitted target and its start against the source: at the scene, and under each held-out light."""
-    from brdfremap.core.metrics import relative_rmse
+    from brdfremap.core.data.metrics import relative_rmse
 
     scene, s_params, src, tgt, t_spec = _renderers(pool, case)
     fixed = t_spec.complete(doc.get("fixed", {}))
@@ -163,8 +163,8 @@ def evaluate(pool, case: tuple, doc: dict) -> dict:
 def reevaluate(args) -> None:
     """Render stored results again under this checkout's validation (the same seeds and placement
     for every run compared); the fits and verdicts are kept as they were."""
-    from brdfremap.core.execute import AdapterPool
-    from brdfremap.core.plugins import collect_adapters
+    from brdfremap.core.job.execute import AdapterPool
+    from brdfremap.core.host.plugins import collect_adapters
 
     run = json.loads(Path(args.input).read_text())
     cases = {c[0]: c for c in CASES}
@@ -181,8 +181,8 @@ def reevaluate(args) -> None:
 
 
 def run(args) -> None:
-    from brdfremap.core.execute import AdapterPool
-    from brdfremap.core.plugins import collect_adapters
+    from brdfremap.core.job.execute import AdapterPool
+    from brdfremap.core.host.plugins import collect_adapters
 
     cases = [c for c in CASES if not args.only or any(o in c[0] for o in args.only)]
     pool = AdapterPool(collect_adapters())

@@ -13,9 +13,9 @@ import time
 
 from common import ROOT, job_for, median, open_adapters, registry
 
-from brdfremap.core.execute import execute
-from brdfremap.core.job import resolve
-from brdfremap.core.schemas import load_material
+from brdfremap.core.job.execute import execute
+from brdfremap.core.job.job import resolve
+from brdfremap.core.data.schemas import load_material
 
 MATERIALS = ("gold", "copper", "blue-plastic")
 

@@ -1,17 +1,11 @@
 """brdf-remap core: the remap engine, metrics, schemas, plugin host and CLI. Knows no renderer."""
 
-from .appearance import Appearance
-from .errors import (
-    AdapterUnavailableError,
-    ConfigError,
-    OptimisationError,
-    RemapError,
-    RenderError,
-)
-from .hookspecs import hookimpl
-from .protocol import Adapter
-from .scene import ProbeScene
-from .schemas import LobeSpec, Material, ModelSpec, ParamSpec
+from .data.appearance import Appearance
+from .data.errors import AdapterUnavailableError, ConfigError, OptimisationError, RemapError, RenderError
+from .data.scene import ProbeScene
+from .data.schemas import LobeSpec, Material, ModelSpec, ParamSpec
+from .host.hookspecs import hookimpl
+from .host.protocol import Adapter
 
 __version__ = "0.1.0"
 __all__ = [

@@ -5,7 +5,7 @@ from __future__ import annotations
 import types
 
 from brdfremap.core import hookimpl
-from brdfremap.core.plugins import collect_adapters, get_plugin_manager
+from brdfremap.core.host.plugins import collect_adapters, get_plugin_manager
 
 
 def registry_of(name: str, factory) -> object:

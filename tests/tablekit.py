@@ -4,7 +4,7 @@ import json
 
 import yaml
 
-from brdfremap.core.scene import ProbeScene
+from brdfremap.core.data.scene import ProbeScene
 from brdfremap.core.tables import Layout, load_table_spec
 from brdfremap.core.tables.outputs import outputs_for
 from brdfremap.core.tables.table import TABLE_SCHEMA_VERSION, BuildRecord, PointRecord, PointVerdict, Table

@@ -15,15 +15,15 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from brdfremap.core.appearance import Appearance
-from brdfremap.core.atomic import temp_beside, write_text_atomic
-from brdfremap.core.errors import ConfigError, RenderError
+from brdfremap.core.data.appearance import Appearance
+from brdfremap.core.data.atomic import temp_beside, write_text_atomic
+from brdfremap.core.data.errors import ConfigError, RenderError
 from brdfremap.core.protocol import Adapter, ModelChoice
-from brdfremap.core.scene import ProbeScene
-from brdfremap.core.schemas import TRANSMISSION_DEPTH, Value
-from brdfremap.core.textures import Texture, TextureMap
-from brdfremap.core.scratch import scratch_dir
-from brdfremap.core.workerproc import JsonLinesWorker
+from brdfremap.core.data.scene import ProbeScene
+from brdfremap.core.data.schemas import TRANSMISSION_DEPTH, Value
+from brdfremap.core.data.textures import Texture, TextureMap
+from brdfremap.core.data.scratch import scratch_dir
+from brdfremap.core.run.workerproc import JsonLinesWorker
 
 from . import appearance as _appearance
 from .material import python_snippet
@@ -288,7 +288,7 @@ class CyclesAdapter(Adapter):
                         scene: ProbeScene) -> np.ndarray:
         """The probe mesh (its UV map) with an Image Texture node per map: the values written as
         float EXRs and read as Non-Color (as they are)."""
-        from brdfremap.core.imageio import write_exr
+        from brdfremap.core.data.imageio import write_exr
 
         self.renders += 1
         files = []

@@ -6,16 +6,8 @@ from __future__ import annotations
 
 import math
 
-from brdfremap.core.appearance import (
-    Appearance,
-    Coat,
-    Sheen,
-    as_rgb,
-    conductor_f0,
-    dielectric_f0,
-    ior_from_f0,
-)
-from brdfremap.core.schemas import Value
+from brdfremap.core.data.appearance import Appearance, Coat, Sheen, as_rgb, conductor_f0, dielectric_f0, ior_from_f0
+from brdfremap.core.data.schemas import Value
 
 _DIST = {"beckmann": "beckmann", "ggx": "ggx", "multi_ggx": "ggx"}
 

@@ -7,12 +7,12 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from brdfremap.core.atomic import temp_beside, write_text_atomic
-from brdfremap.core.errors import ConfigError, RenderError
+from brdfremap.core.data.atomic import temp_beside, write_text_atomic
+from brdfremap.core.data.errors import ConfigError, RenderError
 from brdfremap.core.library.formats import Converted, Entry, clip_into
-from brdfremap.core.schemas import Material
-from brdfremap.core.textures import texture
-from brdfremap.core.workerproc import JsonLinesWorker
+from brdfremap.core.data.schemas import Material
+from brdfremap.core.data.textures import texture
+from brdfremap.core.run.workerproc import JsonLinesWorker
 
 from .adapter import texture_request
 from .material import python_snippet

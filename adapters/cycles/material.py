@@ -3,7 +3,7 @@ with bpy) and the adapter (which writes the Python snippet); imports no bpy."""
 
 from __future__ import annotations
 
-from brdfremap.core.schemas import Value
+from brdfremap.core.data.schemas import Value
 
 # model -> (node type, {param: node input name}, {choice param: node property})
 NODES: dict[str, tuple[str, dict[str, str], dict[str, str]]] = {

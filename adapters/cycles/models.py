@@ -4,7 +4,7 @@ Blender's roughness r is the square root of the microfacet α (α = r²)."""
 
 from __future__ import annotations
 
-from brdfremap.core.schemas import LobeSpec, ModelSpec, Need, ParamSpec
+from brdfremap.core.data.schemas import LobeSpec, ModelSpec, Need, ParamSpec
 
 # Lobes are isolated natively by render passes (Diffuse Direct x Diffuse Color, Glossy
 # Direct x Glossy Color), so no overrides: editing the material to hide a lobe changes the

@@ -29,7 +29,7 @@ def uv_sphere(u: int, v: int) -> tuple[np.ndarray, list[tuple[int, ...]]]:
 
 def uv_loops(u: int, v: int) -> np.ndarray:
     """Texture coordinates of every face corner of ``uv_sphere(u, v)``, in its face order: the
-    probe's convention (`core.textures`: u = φ / 2π about the sphere's own z, v = θ / π from its top
+    probe's convention (`core.data.textures`: u = φ / 2π about the sphere's own z, v = θ / π from its top
     pole, an image's top row at θ = 0), in Blender's terms (its v = 0 is an image's bottom row, so
     1 - θ / π). The seam's corners take u = 1, the poles' the middle of their face."""
     def corner(r: int, c: int) -> tuple[float, float]:  # ring r (0 next to the top pole), column c (may be u)

@@ -8,10 +8,10 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from brdfremap.core.errors import ConfigError
+from brdfremap.core.data.errors import ConfigError
 from brdfremap.core.library.formats import Entry, clip_into
-from brdfremap.core.schemas import Material
-from brdfremap.core.textures import colour_to_linear
+from brdfremap.core.data.schemas import Material
+from brdfremap.core.data.textures import colour_to_linear
 
 from .correspondence import HALF, SCALE, QUIET, TO_PRINCIPLED, TRANSMISSION_TINT
 from .versions import upgrade_inputs
@@ -134,7 +134,7 @@ LINEAR_SPACES = {"", "lin_rec709", "raw", "Raw", "linear", "lin_srgb", "scene-li
 def _textures(shader, category: str, name: str, notes: list[str]) -> dict:
     """The inputs an `image` or `tiledimage` node drives directly (default texture coordinates, no
     tiling), each of a Principled parameter that is that one input as it is, as textures."""
-    from brdfremap.core.textures import texture
+    from brdfremap.core.data.textures import texture
 
     out = {}
     for pname, inputs in TO_PRINCIPLED[category].items():

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from brdfremap.core.atomic import write_text_atomic
-from brdfremap.core.errors import RenderError
+from brdfremap.core.data.atomic import write_text_atomic
+from brdfremap.core.data.errors import RenderError
 from brdfremap.core.library.formats import Converted
 
 from .correspondence import DIRECT, open_pbr_inputs

@@ -10,26 +10,26 @@ from typing import Any
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
-from brdfremap.core import interrupt
-from brdfremap.core.appearance import (
+from brdfremap.core.run import interrupt
+from brdfremap.core.data.appearance import (
     Appearance,
     as_rgb,
     dielectric_f0,
     eta_k_from_reflectivity,
     reflectivity_edge_tint,
 )
-from brdfremap.core.atomic import write_text_atomic
-from brdfremap.core.errors import ConfigError, RenderError
+from brdfremap.core.data.atomic import write_text_atomic
+from brdfremap.core.data.errors import ConfigError, RenderError
 from brdfremap.core.protocol import Adapter, ModelChoice
-from brdfremap.core.scene import PointLight, ProbeScene
-from brdfremap.core.schemas import TRANSMISSION_DEPTH, Value
-from brdfremap.core.textures import Texture, TextureMap
+from brdfremap.core.data.scene import PointLight, ProbeScene
+from brdfremap.core.data.schemas import TRANSMISSION_DEPTH, Value
+from brdfremap.core.data.textures import Texture, TextureMap
 
 from . import appearance as _appearance
 from .appearance import EXT_IOR
 from .blend import SLOTS, blend_appearance, component
-from .envmap import mitsuba_rows
 from .bsdfs import conductor_preset, register_bsdfs, trim_scale
+from .envmap import mitsuba_rows
 from .models import MODELS
 from .variant import as_dict, choose_variant
 
@@ -40,9 +40,9 @@ def _rgb(v: Value) -> dict:
 
 def emitters(scene: ProbeScene, mi) -> dict[str, Any]:
     """The scene's lights as Mitsuba emitters: a point light is `point` (intensity in W/sr), the
-    environment `envmap` with an identity transform (`core.environment`'s orientation is Mitsuba's),
+    environment `envmap` with an identity transform (`core.data.environment`'s orientation is Mitsuba's),
     its map's rows resampled as Mitsuba reads them (`envmap.mitsuba_rows`)."""
-    from brdfremap.core.environment import radiance
+    from brdfremap.core.data.environment import radiance
 
     out: dict[str, Any] = {}
     for i, light in enumerate(scene.lights):

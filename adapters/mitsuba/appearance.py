@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-from brdfremap.core.appearance import (
+from brdfremap.core.data.appearance import (
     Appearance,
     Coat,
     Sheen,
@@ -19,7 +19,7 @@ from brdfremap.core.appearance import (
     ior_from_f0,
     reflectivity_edge_tint,
 )
-from brdfremap.core.schemas import Value
+from brdfremap.core.data.schemas import Value
 
 EXT_IOR = 1.000277  # Mitsuba's default exterior medium (air)
 EtaK = tuple[tuple[float, ...], tuple[float, ...]]

@@ -4,8 +4,8 @@ model (`bsdf_0`, `bsdf_1`: a choice) and each slot's parameters under the slot's
 
 from __future__ import annotations
 
-from brdfremap.core.appearance import Appearance
-from brdfremap.core.schemas import ModelSpec, ParamSpec, Value
+from brdfremap.core.data.appearance import Appearance
+from brdfremap.core.data.schemas import ModelSpec, ParamSpec, Value
 
 SLOTS = ("bsdf_0", "bsdf_1")
 COMPONENTS = ("diffuse", "roughconductor", "roughplastic")

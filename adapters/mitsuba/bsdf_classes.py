@@ -27,7 +27,7 @@ from brdfremap.adapters.mitsuba.bsdfs import (
     rough_transmittance_table,
     trim_scale,
 )
-from brdfremap.core.appearance import eta_k_from_reflectivity
+from brdfremap.core.data.appearance import eta_k_from_reflectivity
 
 if mi.variant() is None:
     raise RuntimeError("set a Mitsuba variant (mitsuba.set_variant) before loading the BSDF classes")

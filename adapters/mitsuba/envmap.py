@@ -1,7 +1,7 @@
 """The scene's environment maps as Mitsuba's `envmap` reads them.
 
 Mitsuba's envmap looks a direction up with its map's first and last rows at the poles (v = 0
-and 1 on the rows' centres), where the project's convention (`core.environment`, and Cycles)
+and 1 on the rows' centres), where the project's convention (`core.data.environment`, and Cycles)
 puts row centres at (i + 0.5) / H: read as it is, every feature of a map lands up to half a
 row off, which a mirror shows and a lens (a glass sphere) magnifies (a perfect mirror under
 the studio: 2.45 % from the analytic image, 1.07 % with the map resampled, as Cycles' 1.08 %;

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from brdfremap.core.schemas import LobeSpec, ModelSpec, ParamSpec
+from brdfremap.core.data.schemas import LobeSpec, ModelSpec, ParamSpec
 
 from .blend import blend_spec
 

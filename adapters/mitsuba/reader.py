@@ -16,10 +16,10 @@ from pathlib import Path
 
 import numpy as np
 
-from brdfremap.core.errors import ConfigError
+from brdfremap.core.data.errors import ConfigError
 from brdfremap.core.library.formats import Entry, clip_into
-from brdfremap.core.schemas import Material, Value
-from brdfremap.core.textures import LUMA, Texture, read_values, texture
+from brdfremap.core.data.schemas import Material, Value
+from brdfremap.core.data.textures import LUMA, Texture, read_values, texture
 
 from .blend import COMPONENTS, SLOTS
 from .models import MODELS

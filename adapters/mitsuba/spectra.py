@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from brdfremap.core.errors import ConfigError
+from brdfremap.core.data.errors import ConfigError
 
 UNBOUNDED = frozenset({"eta", "k"})
 """Properties Mitsuba reads as unbounded spectra (a conductor's complex IOR); every other BSDF

@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
-from brdfremap.core.atomic import write_text_atomic
+from brdfremap.core.data.atomic import write_text_atomic
 from brdfremap.core.library.formats import Converted
 
 from .adapter import bsdf_xml

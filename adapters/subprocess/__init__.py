@@ -11,8 +11,8 @@ from brdfremap.core import hookimpl
 
 @hookimpl
 def brdfremap_register_adapters(register):
-    from brdfremap.core.configio import WrongKindError
-    from brdfremap.core.errors import ConfigError
+    from brdfremap.core.data.configio import WrongKindError
+    from brdfremap.core.data.errors import ConfigError
 
     from .adapter import adapter_class, broken_definition, search_dirs
 

@@ -21,13 +21,13 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
-from brdfremap.core.errors import ConfigError, RenderError
-from brdfremap.core.imageio import HALF_EPS, pixel_format, read_rgb
+from brdfremap.core.data.errors import ConfigError, RenderError
+from brdfremap.core.data.imageio import HALF_EPS, pixel_format, read_rgb
 from brdfremap.core.protocol import Adapter
-from brdfremap.core.scene import ProbeScene
-from brdfremap.core.schemas import Value, format_value
-from brdfremap.core.scratch import scratch_dir
-from brdfremap.core.workerproc import JsonLinesWorker, die_with_parent
+from brdfremap.core.data.scene import ProbeScene
+from brdfremap.core.data.schemas import Value, format_value
+from brdfremap.core.data.scratch import scratch_dir
+from brdfremap.core.run.workerproc import JsonLinesWorker, die_with_parent
 
 from .definition import RendererDef, load_definition
 from .template import sample_vars, scene_vars, substitute

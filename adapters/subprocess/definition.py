@@ -6,8 +6,8 @@ import re
 from pathlib import Path
 from typing import Any, Literal
 
-from brdfremap.core.configio import load_yaml_model
-from brdfremap.core.schemas import LobeSpec, ModelSpec, ParamSpec
+from brdfremap.core.data.configio import load_yaml_model
+from brdfremap.core.data.schemas import LobeSpec, ModelSpec, ParamSpec
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 FORMAT = 2
@@ -27,8 +27,8 @@ class Native(BaseModel):
     @field_validator("file")
     @classmethod
     def _plain(cls, name: str) -> str:
-        from brdfremap.core.execute import IMAGES
-        from brdfremap.core.store import RESULT
+        from brdfremap.core.job.execute import IMAGES
+        from brdfremap.core.run.store import RESULT
 
         reserved = (RESULT, *IMAGES)
         # Compared without case: on a case-insensitive disk Result.json is result.json.
@@ -225,8 +225,8 @@ def load_definition(path: str | Path) -> RendererDef:
     try:
         definition.model_specs()
     except ValueError as exc:
-        from brdfremap.core.configio import validation_message
-        from brdfremap.core.errors import ConfigError
+        from brdfremap.core.data.configio import validation_message
+        from brdfremap.core.data.errors import ConfigError
         from pydantic import ValidationError
 
         msg = validation_message(exc)[1] if isinstance(exc, ValidationError) else str(exc).splitlines()[0]

@@ -12,8 +12,8 @@ import math
 import re
 from pathlib import Path
 
-from brdfremap.core.errors import ConfigError
-from brdfremap.core.scene import ProbeScene
+from brdfremap.core.data.errors import ConfigError
+from brdfremap.core.data.scene import ProbeScene
 
 _PIECE = re.compile(r"\{\{|\}\}|\{([a-z_][a-z0-9_]*)\}")
 """A literal brace pair or a placeholder. Anything else, lone braces included, is text."""

@@ -9,8 +9,8 @@ import os
 import sys
 import traceback
 
-from .. import interrupt
-from ..errors import ConfigError, RemapError
+from ..data.errors import ConfigError, RemapError
+from ..run import interrupt
 
 EXIT_USAGE = 2
 COMMANDS = ("convert", "table", "render", "sweep", "roundtrip", "schema", "adapters", "check")

@@ -1,10 +1,10 @@
-"""`remap check ADAPTER [--model M]`: the adapter contract from the command line (`core.check`)."""
+"""`remap check ADAPTER [--model M]`: the adapter contract from the command line (`core.host.check`)."""
 
 from __future__ import annotations
 
 import argparse
 
-from ..errors import ConfigError
+from ..data.errors import ConfigError
 from . import options
 
 
@@ -19,8 +19,8 @@ def parser() -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..check import run as run_checks
-    from ..plugins import collect_adapters
+    from ..host.check import run as run_checks
+    from ..host.plugins import collect_adapters
 
     registry = collect_adapters()
     name = registry.resolve(args.adapter, field_name="ADAPTER")

@@ -31,12 +31,12 @@ def parser() -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..errors import ConfigError
-    from ..execute import adapter_pool
-    from ..executors import workers
+    from ..data.errors import ConfigError
+    from ..job.execute import adapter_pool
+    from ..run.executors import workers
     from ..library.convert import Destination, convert
     from ..library.formats import collect_formats, expand_inputs, read_all
-    from ..plugins import collect_adapters, get_plugin_manager
+    from ..host.plugins import collect_adapters, get_plugin_manager
 
     pm = get_plugin_manager()
     registry, formats = collect_adapters(pm), collect_formats(pm)

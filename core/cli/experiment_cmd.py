@@ -6,7 +6,7 @@ import argparse
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..data.errors import ConfigError
 from . import options
 
 WHAT = {"sweep": "Sweep one source parameter, remap every point, and write a CSV, plots and the cliffs found.",
@@ -24,10 +24,10 @@ def parser(kind: str) -> argparse.ArgumentParser:
 
 
 def run(kind: str, args: argparse.Namespace) -> int:
-    from ..execute import adapter_pool
-    from ..executors import workers
+    from ..job.execute import adapter_pool
+    from ..run.executors import workers
     from ..experiments import load_experiment, run_experiment
-    from ..plugins import collect_adapters
+    from ..host.plugins import collect_adapters
 
     exp = load_experiment(args.experiment)
     if exp.kind != kind:

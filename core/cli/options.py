@@ -8,10 +8,10 @@ import typing
 
 from pydantic import ValidationError
 
-from ..configio import validation_message
-from ..errors import ConfigError
-from ..scene import ProbeScene, load_scene
-from ..settings import DEFAULTS, Settings
+from ..data.configio import validation_message
+from ..data.errors import ConfigError
+from ..data.scene import ProbeScene, load_scene
+from ..data.settings import DEFAULTS, Settings
 
 _METAVARS = {"starts": "N", "coarse": "N", "precise_spp": "K", "threshold": "FRACTION", "resolve_limit": "FRACTION", "jacobian_updates": "N"}
 

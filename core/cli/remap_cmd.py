@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..errors import ConfigError
+from ..data.errors import ConfigError
 from . import options
 from .show import print_report
 
@@ -67,13 +67,13 @@ def run(args: argparse.Namespace) -> int:
             raise ConfigError("is required (the target's; or --table TABLE, which names it)", field=f"--{flag}")
     if args.no_render:
         raise ConfigError("goes with --table (a fit renders)", field="--no-render")
-    from ..execute import adapter_pool
-    from ..executors import workers
-    from ..job import Job, Target, Where, model_of, resolve
-    from ..plugins import collect_adapters
-    from ..runner import Runner, Task
-    from ..schemas import load_material, parse_fix
-    from ..store import Store, owned
+    from ..job.execute import adapter_pool
+    from ..run.executors import workers
+    from ..job.job import Job, Target, Where, model_of, resolve
+    from ..host.plugins import collect_adapters
+    from ..run.runner import Runner, Task
+    from ..data.schemas import load_material, parse_fix
+    from ..run.store import Store, owned
     from .progress import RenderProgress
 
     source = load_material(args.source)

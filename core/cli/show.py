@@ -5,10 +5,10 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from ..schemas import format_value
+from ..data.schemas import format_value
 
 if TYPE_CHECKING:
-    from ..report import Report
+    from ..job.report import Report
 
 
 def format_params(params: dict, names: list[str] | None = None) -> str:

@@ -7,7 +7,7 @@ import argparse
 import sys
 import time
 
-from ..errors import ConfigError
+from ..data.errors import ConfigError
 from . import options
 
 ACTIONS = ("build", "show")
@@ -39,9 +39,9 @@ def run(argv: list[str]) -> int:
 
 
 def build(args: argparse.Namespace) -> int:
-    from ..execute import adapter_pool
-    from ..executors import workers
-    from ..plugins import collect_adapters
+    from ..job.execute import adapter_pool
+    from ..run.executors import workers
+    from ..host.plugins import collect_adapters
     from ..tables import load_table_spec
     from ..tables.build import build_table
 
@@ -110,10 +110,10 @@ def _summary(t) -> None:
 def lookup(args: argparse.Namespace) -> int:
     """`remap --table T --source M --out DIR`: the target's parameters from the table's map; rendered
     and judged as a fit is (or not at all with --no-render)."""
-    from ..execute import adapter_pool
-    from ..executors import workers
-    from ..runner import Runner, Task
-    from ..store import Store, owned
+    from ..job.execute import adapter_pool
+    from ..run.executors import workers
+    from ..run.runner import Runner, Task
+    from ..run.store import Store, owned
     from ..tables.lookup import write_answer
     from .progress import RenderProgress
     from .show import print_report
@@ -136,9 +136,9 @@ def lookup(args: argparse.Namespace) -> int:
 
 def _lookup_job(args: argparse.Namespace):
     """The lookup as a job, checked: (resolved job, answer, progress header, registry)."""
-    from ..job import Job, Where, model_of, resolve
-    from ..plugins import collect_adapters
-    from ..schemas import load_material
+    from ..job.job import Job, Where, model_of, resolve
+    from ..host.plugins import collect_adapters
+    from ..data.schemas import load_material
     from ..tables import TableMap, read_table
     from ..tables.lookup import axis_values, look_up
     from ..tables.texels import mean_values, read_inputs

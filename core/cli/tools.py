@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConfigError
-from ..schemas import format_value
+from ..data.errors import ConfigError
+from ..data.schemas import format_value
 from . import options
 
 
@@ -42,7 +42,7 @@ def _parameter(p, spec=None) -> str:
 
 
 def adapters(args: argparse.Namespace) -> int:
-    from ..plugins import collect_adapters
+    from ..host.plugins import collect_adapters
 
     registry = collect_adapters()
     names = [registry.resolve(a, field_name="ADAPTER") for a in args.adapter] or registry.names()
@@ -90,12 +90,12 @@ def collect_schemas(pm=None) -> dict[str, Any]:
     from ..experiments.table import ExperimentSummary
     from ..library.records import ConvertSummary
     from ..tables.lookup import LookupRecord
-    from ..job import Job
-    from ..plugins import get_plugin_manager
-    from ..report import Report
-    from ..scene import ProbeScene
-    from ..schemas import Material
-    from ..settings import Settings
+    from ..job.job import Job
+    from ..host.plugins import get_plugin_manager
+    from ..job.report import Report
+    from ..data.scene import ProbeScene
+    from ..data.schemas import Material
+    from ..data.settings import Settings
     from ..tables import Table, TableSpec
 
     out: dict[str, Any] = {"report": Report, "material": Material, "scene": ProbeScene, "experiment": Experiment,
@@ -135,11 +135,11 @@ def render_parser() -> argparse.ArgumentParser:
 
 
 def render(args: argparse.Namespace) -> int:
-    from ..imageio import display_exposure, preview, write_exr, write_png
-    from ..job import model_of
-    from ..plugins import collect_adapters
-    from ..protocol import check_image
-    from ..schemas import load_material
+    from ..data.imageio import display_exposure, preview, write_exr, write_png
+    from ..job.job import model_of
+    from ..host.plugins import collect_adapters
+    from ..host.protocol import check_image
+    from ..data.schemas import load_material
 
     out = _image_path(args.out)
     material = load_material(args.material)
@@ -181,8 +181,8 @@ def _image_path(text: str) -> Path:
     dangling one refused; its folder created and proved writable."""
     import tempfile
 
-    from ..atomic import why
-    from ..store import check_not_owned
+    from ..data.atomic import why
+    from ..run.store import check_not_owned
 
     out = Path(text)
     if out.suffix.lower() not in (".exr", ".png"):

@@ -13,8 +13,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import lsq_linear
 
-from ..metrics import l2
-from ..schemas import ModelSpec, Value
+from ..data.metrics import l2
+from ..data.schemas import ModelSpec, Value
 from .levels import Level
 from .residuals import Tally
 from .settled import Settled

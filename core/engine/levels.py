@@ -2,7 +2,7 @@
 
 The engine never renders by itself: it asks a `Renders` for a `Level` (the target's render
 function there and the source's images), for the source's render noise, and at the end for
-the target's noise and what the renderer does to the fitted values. `core.renders` builds one
+the target's noise and what the renderer does to the fitted values. `core.job.renders` builds one
 from two adapters; tests build one from a toy adapter the same way."""
 
 from __future__ import annotations
@@ -12,9 +12,9 @@ from typing import Callable, Protocol
 
 import numpy as np
 
-from ..metrics import l2
-from ..scene import ProbeScene
-from ..schemas import Value
+from ..data.metrics import l2
+from ..data.scene import ProbeScene
+from ..data.schemas import Value
 from .results import Agreement, Validation
 
 RenderFn = Callable[[dict[str, Value], "str | None"], np.ndarray]
@@ -78,7 +78,7 @@ class Renders(Protocol):
     def agreement(self, params: dict[str, Value], validation: Validation, threshold: float, judged) -> Agreement:
         """Whether the two renderers agree on this kind of material (the source's, and the target's with
         ``params``) under the fit scene and the
-        held-out conditions ``judged(condition)`` says the verdict judges (`core.agreement`)."""
+        held-out conditions ``judged(condition)`` says the verdict judges (`core.job.agreement`)."""
 
     def notes(self, params: dict[str, Value]) -> list[str]:
         """What the target renderer does to these values that the image cannot show (a trim)."""

@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..findings import SchemeChosen
-from ..schemas import ModelSpec
+from ..data.findings import SchemeChosen
+from ..data.schemas import ModelSpec
 
 
 @dataclass(frozen=True)

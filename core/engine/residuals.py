@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import OptimisationError
-from ..metrics import l2
+from ..data.errors import OptimisationError
+from ..data.metrics import l2
 from .levels import ProgressFn, RenderFn
 from .space import ParamSpace
 

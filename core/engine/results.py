@@ -8,9 +8,9 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from ..findings import Verdict
-from ..model import Strict
-from ..schemas import Value
+from ..data.findings import Verdict
+from ..data.model import Strict
+from ..data.schemas import Value
 
 StageStatus = Literal["converged", "below_noise", "polished", "budget", "stopped"]
 CONVERGED: frozenset[str] = frozenset({"converged", "below_noise", "polished"})
@@ -78,7 +78,7 @@ class Disagreement(Strict):
 
 @dataclass
 class Agreement:
-    """Whether the job's two renderers agree on its kind of material (`core.agreement`)."""
+    """Whether the job's two renderers agree on its kind of material (`core.job.agreement`)."""
 
     checked: bool = False
     """Their references were compared (a transmissive material between two adapters)."""
@@ -88,7 +88,7 @@ class Agreement:
     floors: dict[str, Disagreement] = field(default_factory=dict)
     """By held-out condition: how far the two renderers' white Lambertians (`Adapter.calibration`)
     differ there beyond their noise, where they do: a floor no material's error can be asked to go
-    below (`core.agreement.calibration_floors`)."""
+    below (`core.job.agreement.calibration_floors`)."""
 
 
 @dataclass

@@ -12,12 +12,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..account import purpose
-from ..errors import OptimisationError
-from ..findings import ChoiceTried, InputsTried, JointRefined, NoisePolished, PredictionNotRealised, StartKept
-from ..metrics import delta_e_itp, l2, relative_rmse
-from ..schemas import ModelSpec, Value
-from ..settings import Settings
+from ..data.account import purpose
+from ..data.errors import OptimisationError
+from ..data.findings import ChoiceTried, InputsTried, JointRefined, NoisePolished, PredictionNotRealised, StartKept
+from ..data.metrics import delta_e_itp, l2, relative_rmse
+from ..data.schemas import ModelSpec, Value
+from ..data.settings import Settings
 from .assess import Assessment, assess
 from .levels import Level, ProgressFn, Renders
 from .plan import Plan, PlannedStage, plan_stages

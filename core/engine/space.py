@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from ..schemas import ModelSpec, Value
+from ..data.schemas import ModelSpec, Value
 
 
 class ParamSpace:

@@ -9,7 +9,7 @@ from typing import Literal
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..metrics import l2
+from ..data.metrics import l2
 from .jacobian import Jacobian
 from .levels import ProgressFn, RenderFn
 from .residuals import BudgetExhausted, GoodEnough, Residuals, Tally

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pydantic import Field
 
-from ..model import Strict
+from ..data.model import Strict
 
 ENGINE_VERSION = 12
 """Bump whenever a change in core/ would change a result: the engine, but also the informed start
@@ -41,7 +41,7 @@ class Tuning(Strict):
                                                         "noise gets the polish at `Settings.precise_spp` samples.")
     precise_max_spp: int = Field(256, ge=1, description="The polish at more samples is left out where it would "
                                                          "render more samples than this on a fit scene chosen for "
-                                                         "the source (`core.fitscene`: it reached its noise goal "
+                                                         "the source (`core.job.fitscene`: it reached its noise goal "
                                                          "there) whose noise floor is within `precise_noisy`.")
     precise_noisy: float = Field(0.05, ge=0, description="A fit whose noise floor is above this gets the polish at "
                                                          "more samples at any cost (a rough glass under the studio: "

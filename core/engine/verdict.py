@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..findings import (
+from ..data.findings import (
     CannotResolve,
     DeadParameters,
     ErrorAboveThreshold,
@@ -28,7 +28,7 @@ from ..findings import (
     ValidationSkipped,
     Verdict,
 )
-from ..metrics import beyond_noise, clipped_at, eight_bit
+from ..data.metrics import beyond_noise, clipped_at, eight_bit
 from .assess import Assessment
 from .results import WHITE, Agreement, StageResult, Validation
 

@@ -8,8 +8,8 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..report import Report
-from ..schemas import ModelSpec, Value
+from ..data.schemas import ModelSpec, Value
+from ..job.report import Report
 from .spec import Experiment, Point, label
 
 

@@ -8,8 +8,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..atomic import temp_beside, why
-from ..errors import ConfigError
+from ..data.atomic import temp_beside, why
+from ..data.errors import ConfigError
 from .analysis import channels, quantity
 from .spec import label
 

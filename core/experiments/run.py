@@ -10,15 +10,15 @@ import re
 import time
 from pathlib import Path
 
-from ..atomic import write_json_atomic, write_text_atomic
-from ..errors import ConfigError
-from ..executors import Workers
-from ..job import Job, Where, model_of, resolve
-from ..plugins import AdapterRegistry
-from ..runner import Done, Runner, Task
-from ..scene import ProbeScene
-from ..schemas import Material
-from ..store import Store, owned
+from ..data.atomic import write_json_atomic, write_text_atomic
+from ..data.errors import ConfigError
+from ..data.scene import ProbeScene
+from ..data.schemas import Material
+from ..host.plugins import AdapterRegistry
+from ..job.job import Job, Where, model_of, resolve
+from ..run.executors import Workers
+from ..run.runner import Done, Runner, Task
+from ..run.store import Store, owned
 from .analysis import Leg, Row, detect_cliffs, roundtrip_fit
 from .plots import cliff_figure, roundtrip_plot, sweep_plot
 from .spec import Experiment, ExperimentKind, Point, label, points_of

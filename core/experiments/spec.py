@@ -10,11 +10,11 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from ..configio import load_yaml_model
-from ..job import Target
-from ..model import Strict as _Strict
-from ..scene import MAX_SEED, ProbeScene, load_scene
-from ..settings import Settings
+from ..data.configio import load_yaml_model
+from ..data.model import Strict as _Strict
+from ..data.scene import MAX_SEED, ProbeScene, load_scene
+from ..data.settings import Settings
+from ..job.job import Target
 
 MAX_POINTS = 100_000
 

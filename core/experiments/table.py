@@ -12,9 +12,9 @@ import numpy as np
 
 from pydantic import Field
 
-from ..atomic import write_text_atomic
-from ..model import Strict
-from ..schemas import Value
+from ..data.atomic import write_text_atomic
+from ..data.model import Strict
+from ..data.schemas import Value
 from .analysis import Leg, Row
 from .spec import Experiment, label
 

@@ -14,20 +14,20 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..atomic import write_bytes_atomic, write_json_atomic
-from ..errors import ConfigError, RemapError
-from ..execute import IMAGES, AdapterPool
-from ..executors import Workers
-from ..job import Job, Target, Where, resolve
-from ..plugins import AdapterRegistry
-from ..report import read_report
-from ..runner import Done, Runner, Task
-from ..scene import ProbeScene
-from ..settings import Settings
-from ..store import RESULT, Store, owned
+from ..data.atomic import write_bytes_atomic, write_json_atomic
+from ..data.errors import ConfigError, RemapError
+from ..data.scene import ProbeScene
+from ..data.settings import Settings
+from ..data.textures import Texture
+from ..host.plugins import AdapterRegistry
+from ..job.execute import IMAGES, AdapterPool
+from ..job.job import Job, Target, Where, resolve
+from ..job.report import read_report
+from ..run.executors import Workers
+from ..run.runner import Done, Runner, Task
+from ..run.store import RESULT, Store, owned
 from ..tables import Table, TableMap
 from ..tables.lookup import Answer
-from ..textures import Texture
 from .formats import Converted, Entry, Formats
 from .records import ConvertSummary, ItemStatus, MaterialRow
 

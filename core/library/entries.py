@@ -9,9 +9,9 @@ from typing import Any, Protocol
 
 from pydantic import Field
 
-from ..model import Strict
-from ..schemas import Material
-from ..textures import Texture
+from ..data.model import Strict
+from ..data.schemas import Material
+from ..data.textures import Texture
 
 
 class Entry(Strict):

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
-from ..errors import ConfigError
+from ..data.errors import ConfigError
 from .entries import Converted, Entry, Reader
 from .yaml_reader import YamlReader
 
@@ -52,7 +52,7 @@ class Formats:
 
 def collect_formats(pm=None) -> Formats:
     """Every registered reader and writer (the core's YAML reader first)."""
-    from ..plugins import get_plugin_manager
+    from ..host.plugins import get_plugin_manager
 
     pm = pm or get_plugin_manager()
     formats = Formats(readers=[YamlReader()])

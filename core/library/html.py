@@ -6,8 +6,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..atomic import write_text_atomic
-from ..schemas import format_value
+from ..data.atomic import write_text_atomic
+from ..data.schemas import format_value
 from .records import ItemStatus
 
 if TYPE_CHECKING:

@@ -7,7 +7,7 @@ from enum import StrEnum
 
 from pydantic import Field
 
-from ..model import Strict
+from ..data.model import Strict
 
 CONVERT_SCHEMA_VERSION = 1
 

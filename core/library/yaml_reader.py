@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..configio import read_yaml
-from ..schemas import load_material
+from ..data.configio import read_yaml
+from ..data.schemas import load_material
 from .entries import Entry
 
 

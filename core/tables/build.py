@@ -18,13 +18,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..atomic import write_text_atomic
-from ..errors import ConfigError
-from ..executors import Workers
-from ..job import Lookup
-from ..plugins import AdapterRegistry
-from ..runner import Done, Runner
-from ..store import Store, owned
+from ..data.atomic import write_text_atomic
+from ..data.errors import ConfigError
+from ..host.plugins import AdapterRegistry
+from ..job.job import Lookup
+from ..run.executors import Workers
+from ..run.runner import Done, Runner
+from ..run.store import Store, owned
 from .colours import choose_degree, shared_outputs
 from .maps import METHODS, build, choose_hyperparameter
 from .outputs import choose_scales, outputs_for
@@ -195,7 +195,7 @@ def _draft(p: Plan, file: str, spec: TableSpec, points, held, names, first, scen
 
 def checks_account(folder: Path, table: Table) -> tuple[int, float]:
     """Target renders and seconds of this table's stored lookups (checks/<map>/<held-out id>)."""
-    from ..report import read_report
+    from ..job.report import read_report
 
     renders, seconds = 0, 0.0
     for method, c in table.candidates.items():

@@ -10,10 +10,10 @@ from typing import Any
 
 from pydantic import Field
 
-from ..errors import ConfigError
-from ..job import Lookup
-from ..model import Strict
-from ..schemas import Material, ModelSpec
+from ..data.errors import ConfigError
+from ..data.model import Strict
+from ..data.schemas import Material, ModelSpec
+from ..job.job import Lookup
 from .table import Table, TableMap, outside
 
 
@@ -110,9 +110,9 @@ def write_answer(folder, resolved, answer: Answer, adapter, table_file: str) -> 
     from pathlib import Path
 
     from .. import __version__
-    from ..atomic import why, write_bytes_atomic, write_json_atomic
+    from ..data.atomic import why, write_bytes_atomic, write_json_atomic
 
-    from ..texturing import texture_result
+    from ..job.texturing import texture_result
 
     job, spec = resolved.job, resolved.target_spec
     params = spec.active(resolved.base)

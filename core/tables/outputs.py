@@ -4,7 +4,7 @@ complex IOR through its reflectivity and edge tint; and the direct fit's error.
 A conductor's eta and k trade off against each other in an image (the fit's Jacobian is
 ill-conditioned along them), so fits at neighbouring grid points land anywhere along that
 trade-off, and interpolating eta and k separately leaves it. Its reflectivity and edge tint
-(Gulbrandsen 2014, an exact reparameterisation, `core.appearance`) are what the image fixes: a
+(Gulbrandsen 2014, an exact reparameterisation, `core.data.appearance`) are what the image fixes: a
 table maps those and turns them back into eta and k."""
 
 from __future__ import annotations
@@ -16,9 +16,9 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import Field
 
-from ..appearance import eta_k_from_reflectivity, reflectivity_edge_tint
-from ..model import Strict
-from ..schemas import ModelSpec, ParamSpec
+from ..data.appearance import eta_k_from_reflectivity, reflectivity_edge_tint
+from ..data.model import Strict
+from ..data.schemas import ModelSpec, ParamSpec
 from .spec import CHANNELS
 
 ERROR = "error"

@@ -6,12 +6,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..errors import ConfigError
-from ..findings import CannotResolve, ImagePrecision, NoEffect, NotAtMinimum, RendererAlters
-from ..job import Job, Lookup, Where, model_of, resolve
-from ..plugins import AdapterRegistry
-from ..runner import Done, Task
-from ..schemas import Material, ModelSpec
+from ..data.errors import ConfigError
+from ..data.findings import CannotResolve, ImagePrecision, NoEffect, NotAtMinimum, RendererAlters
+from ..data.schemas import Material, ModelSpec
+from ..host.plugins import AdapterRegistry
+from ..job.job import Job, Lookup, Where, model_of, resolve
+from ..run.runner import Done, Task
 from .spec import Layout, TableSpec
 from .table import PointRecord, PointVerdict
 

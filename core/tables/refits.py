@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConfigError
-from ..plugins import AdapterRegistry
-from ..runner import Runner
+from ..data.errors import ConfigError
+from ..host.plugins import AdapterRegistry
+from ..run.runner import Runner
 from .plan import Plan, point_task, record
 from .table import Candidate, PointRecord, Table, TableMap, grid_of
 
@@ -203,7 +203,7 @@ def refits_account(folder: Path, points: list[PointRecord], under: str = "points
                    follow: tuple[str, ...] = ()) -> tuple[int, float]:
     """Target renders and seconds of the refits stored under ``under`` (`refit_folders`: remedies,
     continuation, and path following along the axes ``follow``, kept or not)."""
-    from ..report import read_report
+    from ..job.report import read_report
 
     renders, seconds = 0, 0.0
     for pt in points:

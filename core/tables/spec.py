@@ -19,11 +19,11 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from ..configio import load_yaml_model
+from ..data.configio import load_yaml_model
+from ..data.model import Strict
+from ..data.settings import Settings
 from ..experiments.spec import SceneSpec, SourceSide
-from ..job import Target
-from ..model import Strict
-from ..settings import Settings
+from ..job.job import Target
 
 MAX_POINTS = 20_000
 CHANNELS = "rgb"

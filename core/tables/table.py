@@ -14,13 +14,13 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import Field, computed_field
 
-from ..errors import ConfigError
-from ..model import Strict, WithDerived
-from ..scene import ProbeScene
+from ..data.errors import ConfigError
+from ..data.model import Strict, WithDerived
+from ..data.scene import ProbeScene
+from ..data.versioned import JsonFormat, check_version, parse, read_json
 from .colours import Polynomial, Rows, correction_columns, corrected, gaps
 from .maps import Grid, Regressor, build
 from .outputs import ERROR, Output, assemble, target_value
-from ..versioned import JsonFormat, check_version, parse, read_json
 from .spec import Layout, TableSpec
 
 TABLE_SCHEMA_VERSION = 5
@@ -296,7 +296,7 @@ def outside(table: Table, values: dict[str, Any]) -> list[str]:
 
 
 def write_table(path: Path, table: Table) -> Path:
-    from ..atomic import write_text_atomic
+    from ..data.atomic import write_text_atomic
 
     return write_text_atomic(path, json.dumps(table.model_dump(mode="json"), indent=1, ensure_ascii=False) + "\n")
 

@@ -9,9 +9,9 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ConfigError
-from ..schemas import Material, ModelSpec
-from ..textures import read_values, resized
+from ..data.errors import ConfigError
+from ..data.schemas import Material, ModelSpec
+from ..data.textures import read_values, resized
 from .dense import DenseMap
 from .outputs import param_bounds
 from .table import Table, TableMap, outside

@@ -1,13 +1,13 @@
 """Textures on the probe sphere: each adapter lays an image over the sphere by the same texture
-coordinates (`core.textures`), a constant image renders as the constant, and a texture's values
+coordinates (`core.data.textures`), a constant image renders as the constant, and a texture's values
 reach the BSDF as they are."""
 
 import numpy as np
 import pytest
 
-from brdfremap.core.metrics import relative_rmse
-from brdfremap.core.scene import ProbeScene
-from brdfremap.core.textures import TextureMap
+from brdfremap.core.data.metrics import relative_rmse
+from brdfremap.core.data.scene import ProbeScene
+from brdfremap.core.data.textures import TextureMap
 
 SCENE = ProbeScene().overridden(resolution=64, spp=64)
 

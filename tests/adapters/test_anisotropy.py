@@ -5,9 +5,9 @@ tangent, and Cycles' rotation turns it counter-clockwise about the outward norma
 import numpy as np
 import pytest
 
-from brdfremap.core.appearance import alphas_from_anisotropy, anisotropy_from_alphas
-from brdfremap.core.metrics import relative_rmse
-from brdfremap.core.scene import ProbeScene
+from brdfremap.core.data.appearance import alphas_from_anisotropy, anisotropy_from_alphas
+from brdfremap.core.data.metrics import relative_rmse
+from brdfremap.core.data.scene import ProbeScene
 
 SCENE = ProbeScene(resolution=48, spp=32)
 ALUMINIUM = {"distribution": "ggx", "material": "Al", "anisotropy": "anisotropic"}

@@ -6,9 +6,9 @@ import os
 import numpy as np
 import pytest
 
-from brdfremap.core.errors import RenderError
-from brdfremap.core.metrics import relative_rmse
-from brdfremap.core.scene import EnvironmentLight, ProbeScene
+from brdfremap.core.data.errors import RenderError
+from brdfremap.core.data.metrics import relative_rmse
+from brdfremap.core.data.scene import EnvironmentLight, ProbeScene
 from brdfremap.core.testing import analytic_lambert, sphere_hits
 
 SCENE = ProbeScene(resolution=64)
@@ -126,7 +126,7 @@ def test_a_failing_render_is_a_render_error_with_blenders_message(cycles_adapter
 
 def test_a_batch_over_two_workers_equals_one_at_a_time(cycles_adapter):
     """Parallel finite differences (BRDFREMAP_CYCLES_WORKERS=2) must not change a single pixel."""
-    from brdfremap.core.scene import ProbeScene
+    from brdfremap.core.data.scene import ProbeScene
 
     spec, scene = cycles_adapter.models["principled"], ProbeScene(resolution=32)
     reqs = [("principled", spec.complete({"roughness": 0.21 + 0.03 * i, "metallic": 0.5}), scene, lobe)

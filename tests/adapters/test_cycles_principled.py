@@ -4,8 +4,8 @@ and a material that uses them converts with a verdict instead of being refused."
 import numpy as np
 import pytest
 
-from brdfremap.core.metrics import relative_rmse
-from brdfremap.core.scene import ProbeScene
+from brdfremap.core.data.metrics import relative_rmse
+from brdfremap.core.data.scene import ProbeScene
 
 SCENE = ProbeScene(resolution=32, spp=16)
 COPPER = {"base_color": [0.955, 0.638, 0.538], "metallic": 1.0, "roughness": 0.35}

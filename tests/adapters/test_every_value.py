@@ -5,8 +5,8 @@ roughness with no coat), and then it counts once that condition is lifted."""
 
 import numpy as np
 import pytest
-from brdfremap.core.errors import ConfigError
-from brdfremap.core.scene import EnvironmentLight, ProbeScene
+from brdfremap.core.data.errors import ConfigError
+from brdfremap.core.data.scene import EnvironmentLight, ProbeScene
 
 SCENE = ProbeScene(lights=[EnvironmentLight(type="environment", map="studio")], resolution=32, spp=16)
 """Where every model shows (a mirror as much as a Lambertian): the studio environment."""

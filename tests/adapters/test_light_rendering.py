@@ -7,9 +7,9 @@ best 19 %); these tests hold it there."""
 
 import numpy as np
 import pytest
-from brdfremap.core.imageio import write_exr
-from brdfremap.core.metrics import relative_rmse
-from brdfremap.core.scene import EnvironmentLight, PointLight, ProbeScene
+from brdfremap.core.data.imageio import write_exr
+from brdfremap.core.data.metrics import relative_rmse
+from brdfremap.core.data.scene import EnvironmentLight, PointLight, ProbeScene
 from brdfremap.core.testing import analytic_lambert, sphere_hits
 
 

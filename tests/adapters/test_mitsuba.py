@@ -2,8 +2,8 @@
 
 import pytest
 
-from brdfremap.core.metrics import relative_rmse
-from brdfremap.core.scene import ProbeScene
+from brdfremap.core.data.metrics import relative_rmse
+from brdfremap.core.data.scene import ProbeScene
 
 SCENE = ProbeScene(resolution=64)
 

@@ -5,8 +5,8 @@ albedo. Also the energy-conservation safeguard the paper's instabilities come fr
 import numpy as np
 import pytest
 
-from brdfremap.core.metrics import relative_rmse
-from brdfremap.core.scene import ProbeScene
+from brdfremap.core.data.metrics import relative_rmse
+from brdfremap.core.data.scene import ProbeScene
 
 from brdfremap.adapters.mitsuba.validation import (CHI2_CASES as CASES, FURNACE_CASES as FURNACE, FURNACE_COS,
                                                    INCIDENT as WI, albedo, chi2, reciprocity)

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from brdfremap.adapters.subprocess.adapter import adapter_class
-from brdfremap.core.errors import ConfigError, RenderError
-from brdfremap.core.metrics import relative_rmse
-from brdfremap.core.scene import ProbeScene
+from brdfremap.core.data.errors import ConfigError, RenderError
+from brdfremap.core.data.metrics import relative_rmse
+from brdfremap.core.data.scene import ProbeScene
 from brdfremap.core.testing import AdapterContract, analytic_lambert
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "renderers"

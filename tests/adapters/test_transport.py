@@ -9,8 +9,8 @@ Cycles, and Cycles' point-cloud sphere, which a ray inside it does not hit) the 
 
 import numpy as np
 import pytest
-from brdfremap.core.metrics import beyond_noise, relative_rmse
-from brdfremap.core.scene import EnvironmentLight, PointLight, ProbeScene
+from brdfremap.core.data.metrics import beyond_noise, relative_rmse
+from brdfremap.core.data.scene import EnvironmentLight, PointLight, ProbeScene
 from brdfremap.core.testing import analytic_glass, sphere_hits
 
 STUDIO = ProbeScene(lights=[EnvironmentLight(type="environment", map="studio")], resolution=64, spp=256)

@@ -7,7 +7,7 @@ import pytest
 
 from brdfremap.core.cli import main
 from reports import read_result
-from brdfremap.core.imageio import read_image
+from brdfremap.core.data.imageio import read_image
 
 
 def _run(tmp_path, root, material, *args):
@@ -105,12 +105,12 @@ def test_joint_rounds_that_do_not_realise_the_predicted_gain_leave_a_note_not_a_
     """AlSb α 0.05 (Ashikhmin-Shirley) to Ward, as Fig. 5 fits it: the verdict's Gauss-Newton step
     predicted about 0.2 % from 0.52 %, two joint rounds reached 0.51 %. A prediction that steps
     cannot realise is no reason to call the result unreliable; it is reported as a note."""
-    from brdfremap.core.execute import AdapterPool, execute
-    from brdfremap.core.job import Job, Target, resolve
-    from brdfremap.core.plugins import collect_adapters
-    from brdfremap.core.schemas import Material
+    from brdfremap.core.job.execute import AdapterPool, execute
+    from brdfremap.core.job.job import Job, Target, resolve
+    from brdfremap.core.host.plugins import collect_adapters
+    from brdfremap.core.data.schemas import Material
     from brdfremap.core.engine import Tuning
-    from brdfremap.core.settings import Settings
+    from brdfremap.core.data.settings import Settings
 
     reg = collect_adapters()
     src = Material(adapter="mitsuba", model="ashikhmin_shirley", params={"material": "AlSb", "alpha": 0.05})
@@ -148,7 +148,7 @@ def test_the_same_job_into_the_same_folder_is_reused_and_force_fits_again(tmp_pa
 
 
 def test_remap_render_writes_the_adapters_image(tmp_path, root, mitsuba_adapter):
-    from brdfremap.core.scene import ProbeScene
+    from brdfremap.core.data.scene import ProbeScene
 
     mat = root / "configs/materials/gold.yaml"
     assert main(["render", str(mat), "--out", str(tmp_path / "g.exr"), "--resolution", "48", "--quiet"]) == 0

@@ -10,9 +10,9 @@ import sys
 import numpy as np
 import yaml
 from brdfremap.core.cli import main
-from brdfremap.core.imageio import read_image
-from brdfremap.core.metrics import relative_rmse
-from brdfremap.core.scene import EnvironmentLight, ProbeScene
+from brdfremap.core.data.imageio import read_image
+from brdfremap.core.data.metrics import relative_rmse
+from brdfremap.core.data.scene import EnvironmentLight, ProbeScene
 from brdfremap.core.tables.build import fit_candidates
 from brdfremap.core.tables.table import write_table
 from helpers import ROOT, one_line_error, remap
@@ -228,8 +228,8 @@ def test_convert_takes_the_table_whose_direct_fits_come_closest(tmp_path):
         _through_table,
     )
     from brdfremap.core.library.formats import collect_formats, read_all
-    from brdfremap.core.plugins import collect_adapters
-    from brdfremap.core.settings import Settings
+    from brdfremap.core.host.plugins import collect_adapters
+    from brdfremap.core.data.settings import Settings
     from brdfremap.core.tables import TableMap
 
     registry = collect_adapters()

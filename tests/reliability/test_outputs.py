@@ -9,7 +9,7 @@ import sys
 import time
 
 import pytest
-from brdfremap.core.store import Store
+from brdfremap.core.run.store import Store
 from helpers import MATERIALS, SmallFilesystem, fill, one_line_error, remap
 
 GOLD = MATERIALS / "gold.yaml"
@@ -122,7 +122,7 @@ def test_render_writes_through_a_link_and_keeps_it(tmp_path, mitsuba_adapter):
 
 
 def test_a_remap_into_a_running_sweeps_point_is_refused(tmp_path, mitsuba_adapter):
-    from brdfremap.core.store import owned
+    from brdfremap.core.run.store import owned
 
     with owned(tmp_path / "sweep"):
         proc = remap("--source", GOLD, "--out", tmp_path / "sweep" / "points" / "00-003", *SMALL)
@@ -192,7 +192,7 @@ def test_an_interrupted_swap_leaves_the_previous_result_or_the_new_one(tmp_path,
 
 
 def test_render_into_a_running_sweeps_folder_and_a_disk_that_fills_are_refused(tmp_path, mitsuba_adapter):
-    from brdfremap.core.store import owned
+    from brdfremap.core.run.store import owned
 
     with owned(tmp_path / "sweep"):
         one_line_error(remap("render", GOLD, "--out", tmp_path / "sweep" / "points" / "p" / "t.exr"),

@@ -10,8 +10,8 @@ import time
 from pathlib import Path
 
 import pytest
-from brdfremap.core.scene import ProbeScene
-from brdfremap.core.workerproc import JsonLinesWorker
+from brdfremap.core.data.scene import ProbeScene
+from brdfremap.core.run.workerproc import JsonLinesWorker
 from helpers import MATERIALS, SmallFilesystem, fill, one_line_error, remap
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "renderers"

@@ -10,13 +10,19 @@ from brdfremap.adapters.cycles import appearance as cycles
 from brdfremap.adapters.mitsuba import appearance as mitsuba
 from brdfremap.adapters.cycles.models import MODELS as CYCLES
 from brdfremap.adapters.mitsuba.models import MODELS as MITSUBA
-from brdfremap.core.appearance import (Appearance, conductor_f0, dielectric_f0, eta_k_from_reflectivity, ior_from_f0,
-                                       reflectivity_edge_tint)
-from brdfremap.core.scene import ProbeScene
-from brdfremap.core.schemas import Material
-from brdfremap.core.execute import AdapterPool, execute, fitted, informed_start
-from brdfremap.core.job import Job, Target, resolve
-from brdfremap.core.settings import Settings
+from brdfremap.core.data.appearance import (
+    Appearance,
+    conductor_f0,
+    dielectric_f0,
+    eta_k_from_reflectivity,
+    ior_from_f0,
+    reflectivity_edge_tint,
+)
+from brdfremap.core.data.scene import ProbeScene
+from brdfremap.core.data.schemas import Material
+from brdfremap.core.job.execute import AdapterPool, execute, fitted, informed_start
+from brdfremap.core.job.job import Job, Target, resolve
+from brdfremap.core.data.settings import Settings
 from brdfremap_example.adapter import ToyAdapter
 from helpers import registry_of
 
@@ -157,8 +163,8 @@ def test_a_noise_limited_fit_is_polished_at_more_samples():
 
 
 def test_a_complex_ior_needs_an_edge_tint_where_schlick_misses_its_edge():
-    from brdfremap.core.appearance import EDGE_COS, conductor_fresnel, schlick
-    from brdfremap.core.schemas import Need
+    from brdfremap.core.data.appearance import EDGE_COS, conductor_fresnel, schlick
+    from brdfremap.core.data.schemas import Need
 
     eta, k = (1.66, 0.88, 0.52), (9.22, 6.27, 4.84)  # aluminium: its edge dips below Schlick's
     al = Appearance(kind="conductor", alpha=0.09, specular=conductor_f0(eta, k), eta=eta, k=k)
@@ -172,7 +178,7 @@ def test_a_complex_ior_needs_an_edge_tint_where_schlick_misses_its_edge():
 
 def test_a_burley_diffuse_needs_what_no_shipped_input_renders():
     from brdfremap.adapters.cycles.models import MODELS
-    from brdfremap.core.schemas import Need
+    from brdfremap.core.data.schemas import Need
 
     banana = Appearance(kind="dielectric", alpha=0.25, specular=(0.04,) * 3, diffuse=(0.66, 0.52, 0.12),
                         diffuse_model="burley")

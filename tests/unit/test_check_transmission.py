@@ -3,8 +3,8 @@
 light only, the probe's old transport) or a sphere that lets nothing through fails with its fix."""
 
 import numpy as np
-from brdfremap.core.check import GLASS, transmission
-from brdfremap.core.schemas import ModelSpec, ParamSpec
+from brdfremap.core.host.check import GLASS, transmission
+from brdfremap.core.data.schemas import ModelSpec, ParamSpec
 from brdfremap.core.testing import analytic_glass, sphere_hits
 
 GLASSY = {"glass": ModelSpec(name="glass", transmits=True,

@@ -110,7 +110,7 @@ def test_a_swallowed_ctrl_c_is_still_honoured_at_the_next_check():
 
     import pytest
 
-    from brdfremap.core import interrupt
+    from brdfremap.core.run import interrupt
 
     previous = signal.getsignal(signal.SIGINT)
     try:

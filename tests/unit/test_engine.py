@@ -6,10 +6,10 @@ import pytest
 from brdfremap.core.engine import ParamSpace, Tuning, plan_stages, remap
 from brdfremap.core.engine.residuals import Tally
 from brdfremap.core.engine.stage import Stage, StageConfig
-from brdfremap.core.errors import OptimisationError
-from brdfremap.core.renders import CachedRenderer, ProbeRenders
-from brdfremap.core.scene import ProbeScene
-from brdfremap.core.settings import Settings
+from brdfremap.core.data.errors import OptimisationError
+from brdfremap.core.job.renders import CachedRenderer, ProbeRenders
+from brdfremap.core.data.scene import ProbeScene
+from brdfremap.core.data.settings import Settings
 from brdfremap_example.adapter import TOY, ToyAdapter
 
 SCENE = ProbeScene(resolution=48)
@@ -155,7 +155,7 @@ def _table(plan):
 
 
 def test_plan_stages_folds_a_missing_target_lobe_into_the_full_image():
-    from brdfremap.core.schemas import LobeSpec
+    from brdfremap.core.data.schemas import LobeSpec
 
     conductor = TOY.model_copy(update={"lobes": {"diffuse": LobeSpec(empty=True),
                                                  "specular": LobeSpec(params=("specular", "alpha"))}})
@@ -165,7 +165,7 @@ def test_plan_stages_folds_a_missing_target_lobe_into_the_full_image():
 
 
 def test_auto_scheme_splits_only_lobes_that_divide_the_parameters():
-    from brdfremap.core.schemas import LobeSpec
+    from brdfremap.core.data.schemas import LobeSpec
 
     lobes = {"diffuse": 1, "specular": 1}
     plan = plan_stages("auto", TOY, TOY.fittable(TOY.complete({})), lobes)
@@ -283,7 +283,7 @@ def test_the_verdict_reuses_the_last_stage_jacobian_when_updates_are_on():
 def test_the_polish_leaves_out_parameters_the_coarse_fit_settled():
     """A parameter pinned at its bound by the coarse fit, and one that cannot change the image
     there (inert_when), are not polished: fewer full-resolution renders, same fit, same verdict."""
-    from brdfremap.core.schemas import ModelSpec
+    from brdfremap.core.data.schemas import ModelSpec
 
     capped = ModelSpec(name="toy", lobes=TOY.lobes, parameters=(
         TOY.param("diffuse"), TOY.param("specular").model_copy(update={"upper": 0.6}), TOY.param("alpha"),
@@ -307,7 +307,7 @@ def test_the_polish_leaves_out_parameters_the_coarse_fit_settled():
 
 
 def test_inert_when_must_name_another_parameter():
-    from brdfremap.core.schemas import ModelSpec
+    from brdfremap.core.data.schemas import ModelSpec
 
     bad = TOY.param("unused").model_copy(update={"inert_when": {"nope": 1.0}})
     with pytest.raises(ValueError, match="inert_when refers to 'nope'"):
@@ -318,7 +318,7 @@ def test_inert_when_must_name_another_parameter():
 def test_a_parameter_nearly_inert_gets_a_zero_column_without_a_render():
     """inert_when met within 1 % of the range: the column is zero, not rendered, and stays zero
     through the updates; away from it the column is rendered again."""
-    from brdfremap.core.schemas import ModelSpec
+    from brdfremap.core.data.schemas import ModelSpec
 
     spec = ModelSpec(name="toy", lobes=TOY.lobes, parameters=(
         TOY.param("diffuse"), TOY.param("specular"),

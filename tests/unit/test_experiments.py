@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from brdfremap.core.cli import main
-from brdfremap.core.errors import ConfigError
+from brdfremap.core.data.errors import ConfigError
 from brdfremap.core.experiments import Experiment, find_cliffs, load_experiment, points_of
 
 K, W, FLOOR = 4.0, 3, 1e-3

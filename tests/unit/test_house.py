@@ -5,14 +5,14 @@ import json
 import pytest
 
 from brdfremap.core.cli import main
-from brdfremap.core.errors import ConfigError
-from brdfremap.core.execute import AdapterPool, execute
-from brdfremap.core.job import Job, Target, resolve
-from brdfremap.core.report import READS_FROM, SCHEMA_VERSION, Report, parse_report, read_report
-from brdfremap.core.scene import ProbeScene
-from brdfremap.core.schemas import Material
-from brdfremap.core.settings import DEFAULTS, Settings
-from brdfremap.core.store import Store, owned
+from brdfremap.core.data.errors import ConfigError
+from brdfremap.core.job.execute import AdapterPool, execute
+from brdfremap.core.job.job import Job, Target, resolve
+from brdfremap.core.job.report import READS_FROM, SCHEMA_VERSION, Report, parse_report, read_report
+from brdfremap.core.data.scene import ProbeScene
+from brdfremap.core.data.schemas import Material
+from brdfremap.core.data.settings import DEFAULTS, Settings
+from brdfremap.core.run.store import Store, owned
 from brdfremap_example.adapter import ToyAdapter
 from helpers import registry_of
 
@@ -50,12 +50,12 @@ def test_a_job_key_is_what_determines_the_result_and_nothing_else():
 def test_a_job_is_checked_before_any_render_naming_the_field():
     reg = _registry()
     with pytest.raises(ConfigError, match="m.yaml: params.alpha: 7 is outside"):
-        from brdfremap.core.job import Where
+        from brdfremap.core.job.job import Where
 
         resolve(_job(source=SRC.model_copy(update={"params": {"alpha": 7}})), reg, Where(source_file="m.yaml"))
     # A data file names an adapter; it never points at a renderer definition to run.
     with pytest.raises(ConfigError, match="'r.yaml' is a file: a data file names an installed adapter"):
-        from brdfremap.core.job import Where
+        from brdfremap.core.job.job import Where
 
         resolve(_job(source=SRC.model_copy(update={"adapter": "r.yaml"})), reg, Where(source_file="m.yaml"))
 
@@ -174,7 +174,7 @@ def test_a_report_document_validates_against_the_published_schema(tmp_path):
 def test_an_error_keeps_its_parts_and_they_cross_processes():
     import pickle
 
-    from brdfremap.core.errors import RenderError
+    from brdfremap.core.data.errors import RenderError
 
     err = pickle.loads(pickle.dumps(ConfigError("must be positive", file="m.yaml", field="params.alpha")))
     assert str(err) == "m.yaml: params.alpha: must be positive"
@@ -185,7 +185,7 @@ def test_an_error_keeps_its_parts_and_they_cross_processes():
 
 
 def test_a_study_fits_the_given_inputs_and_a_job_from_a_file_names_its_keys():
-    from brdfremap.core.job import Where
+    from brdfremap.core.job.job import Where
 
     assert Settings().inputs == "needed" and Settings().for_study().inputs == "given"
     assert Settings(fit_scene="as-given").for_study().fit_scene == "as-given"

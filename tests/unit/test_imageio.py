@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from brdfremap.core.imageio import read_image, write_exr
+from brdfremap.core.data.imageio import read_image, write_exr
 
 
 def test_a_pfm_written_bottom_row_first_reads_the_right_way_up(tmp_path):

@@ -10,13 +10,13 @@ import pytest
 from brdfremap.adapters.cycles import appearance as cycles
 from brdfremap.adapters.mitsuba import appearance as mitsuba
 from brdfremap.adapters.mitsuba.bsdfs import conductor_preset
-from brdfremap.core.execute import fitted, informed_start
-from brdfremap.core.fitscene import choose
-from brdfremap.core.job import Job, Target, resolve
-from brdfremap.core.plugins import collect_adapters
-from brdfremap.core.scene import ProbeScene
-from brdfremap.core.schemas import Material
-from brdfremap.core.settings import Settings
+from brdfremap.core.job.execute import fitted, informed_start
+from brdfremap.core.job.fitscene import choose
+from brdfremap.core.job.job import Job, Target, resolve
+from brdfremap.core.host.plugins import collect_adapters
+from brdfremap.core.data.scene import ProbeScene
+from brdfremap.core.data.schemas import Material
+from brdfremap.core.data.settings import Settings
 
 READINGS = {
     "cycles": SimpleNamespace(appearance=cycles.appearance, from_appearance=cycles.from_appearance),
@@ -167,10 +167,10 @@ def test_a_blend_weighted_by_a_texture_is_still_two_bsdfs(tmp_path):
 
 def test_a_front_lit_fit_scene_gets_a_back_light_view_weighted_like_the_front():
     """By default a scene of point lights that resolves the source is fitted with a second view lit
-    from behind (`core.fitscene.with_back_light`); its intensity makes the source's back view weigh
+    from behind (`core.job.fitscene.with_back_light`); its intensity makes the source's back view weigh
     `BACK_WEIGHT` of the first. Left out with --fit-scene one-view or as-given, and where the fit runs
     elsewhere."""
-    from brdfremap.core.fitscene import BACK, BACK_WEIGHT
+    from brdfremap.core.job.fitscene import BACK, BACK_WEIGHT
     from brdfremap.core.testing import analytic_lambert
 
     scene = ProbeScene(resolution=32)

@@ -7,11 +7,11 @@ import math
 
 import numpy as np
 import pytest
-from brdfremap.core import environment
-from brdfremap.core.errors import ConfigError
-from brdfremap.core.imageio import write_exr
-from brdfremap.core.renders import CachedRenderer
-from brdfremap.core.scene import EnvironmentLight, PointLight, ProbeScene, load_scene
+from brdfremap.core.data import environment
+from brdfremap.core.data.errors import ConfigError
+from brdfremap.core.data.imageio import write_exr
+from brdfremap.core.job.renders import CachedRenderer
+from brdfremap.core.data.scene import EnvironmentLight, PointLight, ProbeScene, load_scene
 from brdfremap.core.testing import analytic_lambert, environment_irradiance, sphere_hits
 from brdfremap_example.adapter import ToyAdapter
 

@@ -1,6 +1,6 @@
 import numpy as np
 
-from brdfremap.core.metrics import delta_e_itp, relative_rmse
+from brdfremap.core.data.metrics import delta_e_itp, relative_rmse
 
 
 def _img(seed=0):

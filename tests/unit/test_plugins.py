@@ -5,8 +5,8 @@ import types
 import pytest
 
 from brdfremap.core import hookimpl
-from brdfremap.core.errors import AdapterUnavailableError, ConfigError
-from brdfremap.core.plugins import collect_adapters, get_plugin_manager
+from brdfremap.core.data.errors import AdapterUnavailableError, ConfigError
+from brdfremap.core.host.plugins import collect_adapters, get_plugin_manager
 from brdfremap_example.adapter import ToyAdapter
 
 

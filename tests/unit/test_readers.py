@@ -4,7 +4,7 @@ package), the project's YAML; their errors name the file."""
 from pathlib import Path
 
 import pytest
-from brdfremap.core.errors import ConfigError
+from brdfremap.core.data.errors import ConfigError
 from brdfremap.core.library.formats import collect_formats, expand_inputs, read_all
 
 DATA = Path(__file__).resolve().parents[1] / "data"

@@ -1,7 +1,7 @@
 import pytest
 
-from brdfremap.core.errors import ConfigError
-from brdfremap.core.schemas import LobeSpec, ModelSpec, ParamSpec, parse_fix
+from brdfremap.core.data.errors import ConfigError
+from brdfremap.core.data.schemas import LobeSpec, ModelSpec, ParamSpec, parse_fix
 from brdfremap_example.adapter import TOY
 
 

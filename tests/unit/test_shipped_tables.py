@@ -3,8 +3,8 @@ rebuild would be caught here), reads whole, and answers lookups inside its targe
 
 import numpy as np
 import pytest
-from brdfremap.core.appearance import reflectivity_edge_tint
-from brdfremap.core.plugins import collect_adapters
+from brdfremap.core.data.appearance import reflectivity_edge_tint
+from brdfremap.core.host.plugins import collect_adapters
 from brdfremap.core.tables import TableMap, load_table_spec, read_table
 from brdfremap.core.tables.dense import DenseMap
 from helpers import ROOT

@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from brdfremap.core.account import PURPOSES, Ledger, Metered, purpose
-from brdfremap.core.scene import PointLight, ProbeScene
-from brdfremap.core.validation import CONDITIONS, point_resolution, scenes
+from brdfremap.core.data.account import PURPOSES, Ledger, Metered, purpose
+from brdfremap.core.data.scene import PointLight, ProbeScene
+from brdfremap.core.job.validation import CONDITIONS, point_resolution, scenes
 
 
 class _Renderer:
@@ -60,10 +60,10 @@ def test_frontal_point_lights_take_half_the_resolution_where_the_highlight_shows
 
 
 def test_no_tries_of_a_distribution_for_a_target_held_smooth():
-    from brdfremap.core.execute import alternatives
-    from brdfremap.core.job import Job, Target, resolve
-    from brdfremap.core.plugins import collect_adapters
-    from brdfremap.core.schemas import Material
+    from brdfremap.core.job.execute import alternatives
+    from brdfremap.core.job.job import Job, Target, resolve
+    from brdfremap.core.host.plugins import collect_adapters
+    from brdfremap.core.data.schemas import Material
 
     registry = collect_adapters()
     why = registry.get("cycles").unavailable_reason()

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import yaml
 
-from brdfremap.core.errors import ConfigError
-from brdfremap.core.plugins import collect_adapters
-from brdfremap.core.schemas import Material
+from brdfremap.core.data.errors import ConfigError
+from brdfremap.core.host.plugins import collect_adapters
+from brdfremap.core.data.schemas import Material
 from brdfremap.core.tables import Layout, TableMap, load_table_spec, read_table
 from brdfremap.core.tables.build import choose, plan
 from brdfremap.core.tables.lookup import axis_values, look_up
@@ -229,7 +229,7 @@ def test_an_output_the_channels_share_weighs_each_channel_by_its_brightness(tmp_
 
 
 def test_only_a_fit_in_question_with_a_remedy_is_refitted_and_only_with_what_it_changes():
-    from brdfremap.core.settings import Settings
+    from brdfremap.core.data.settings import Settings
     from brdfremap.core.tables.refits import _remedy
     from brdfremap.core.tables.table import PointRecord
 
@@ -249,7 +249,7 @@ def test_a_remedy_refit_replaces_the_first_fit_only_where_it_ends_lower(tmp_path
     refit runs with scheme three, stored beside its point."""
     from types import SimpleNamespace
 
-    from brdfremap.core.runner import Done
+    from brdfremap.core.run.runner import Done
     from brdfremap.core.tables.refits import remedy_points
     from brdfremap.core.tables.table import PointRecord
 
@@ -379,7 +379,7 @@ def test_the_digest_covers_the_map_not_the_builds_timing(tmp_path):
 
 def test_a_conductors_eta_and_k_are_mapped_as_reflectivity_and_edge_tint():
     from brdfremap.adapters.mitsuba.models import MODELS
-    from brdfremap.core.appearance import eta_k_from_reflectivity, reflectivity_edge_tint
+    from brdfremap.core.data.appearance import eta_k_from_reflectivity, reflectivity_edge_tint
     from brdfremap.core.tables.outputs import finish, outputs_for, target_value, within_bounds
 
     outs = outputs_for(MODELS["roughconductor"], ["eta", "k", "alpha"], separable=True)
@@ -501,8 +501,8 @@ def test_path_following_refits_each_step_from_its_predecessor_as_it_now_stands(t
     failed fit starts nobody and takes any refit; down, every refit is higher and none is kept."""
     from types import SimpleNamespace
 
-    from brdfremap.core.runner import Done
-    from brdfremap.core.findings import NotAtMinimum
+    from brdfremap.core.run.runner import Done
+    from brdfremap.core.data.findings import NotAtMinimum
     from brdfremap.core.tables.refits import follow_points
     from brdfremap.core.tables.table import PointRecord
 

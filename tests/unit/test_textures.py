@@ -4,8 +4,8 @@ channels, broken files, and the round trip of a written map."""
 import numpy as np
 import pytest
 
-from brdfremap.core.errors import ConfigError
-from brdfremap.core.textures import encode, read_values, texture
+from brdfremap.core.data.errors import ConfigError
+from brdfremap.core.data.textures import encode, read_values, texture
 
 
 def _write(path, px, fmt="uint8", straight_alpha=False):

@@ -83,8 +83,8 @@ def test_an_unresolvable_condition_is_never_passed_while_another_judges_the_resu
 def test_an_unresolved_condition_is_rendered_again_at_the_samples_that_resolve_it():
     """A held-out light whose two renders differ by more than the limit is rendered again at up to 8x
     the samples where the noise (1/sqrt(spp)) predicts that resolves it; not where it cannot."""
-    from brdfremap.core.scene import ProbeScene
-    from brdfremap.core.validation import RESOLVE_FACTOR, validate
+    from brdfremap.core.data.scene import ProbeScene
+    from brdfremap.core.job.validation import RESOLVE_FACTOR, validate
 
     rng = np.random.default_rng(1)
     seen = []
@@ -166,8 +166,8 @@ def test_the_scene_as_given_is_not_judged_on_one_lucky_pair_of_renders():
     """Au α 0.002 fitted under the environment: at 64 spp two seeds of the probe differed by 3 %
     while a third differed from them by 70 % (a sub-pixel highlight a few samples carry). The
     source's difference measured before the fit, scaled to the check's samples, bounds the floor."""
-    from brdfremap.core.scene import ProbeScene
-    from brdfremap.core.validation import validate
+    from brdfremap.core.data.scene import ProbeScene
+    from brdfremap.core.job.validation import validate
 
     scene = ProbeScene(resolution=16, spp=16)
     source = lambda sc: np.ones((16, 16, 3), np.float32)  # noqa: E731 - two seeds agree exactly
@@ -183,8 +183,8 @@ def test_the_scene_as_given_is_not_judged_on_one_lucky_pair_of_renders():
 
 
 def test_a_fit_at_more_samples_of_the_same_lights_checks_no_scene_as_given():
-    from brdfremap.core.renders import ProbeRenders
-    from brdfremap.core.scene import EnvironmentLight, ProbeScene
+    from brdfremap.core.job.renders import ProbeRenders
+    from brdfremap.core.data.scene import EnvironmentLight, ProbeScene
 
     job = ProbeScene()
     more = ProbeRenders(None, {}, None, None, job.with_(spp=256), given=job)
@@ -196,7 +196,7 @@ def test_a_fit_at_more_samples_of_the_same_lights_checks_no_scene_as_given():
 def test_a_uniform_float_image_is_neither_clipped_nor_8_bit():
     """Review: a white 0.8 sphere under a constant environment has every lit pixel at exactly 0.8
     (level 204/255): not a clipped or 8-bit image. A sphere clipped at 1 with a lit slope below is."""
-    from brdfremap.core.metrics import clipped_at, eight_bit
+    from brdfremap.core.data.metrics import clipped_at, eight_bit
 
     uniform = np.zeros((64, 64, 3), np.float32)
     uniform[8:56, 8:56] = 0.8
@@ -209,7 +209,7 @@ def test_a_uniform_float_image_is_neither_clipped_nor_8_bit():
 
 
 def test_a_lookup_about_as_close_as_the_tables_fits_is_a_mismatch_not_a_failure():
-    from brdfremap.core.findings import TableLookup
+    from brdfremap.core.data.findings import TableLookup
 
     def judged(error, expected):
         ev = Evidence(error=error, noise_floor=0.005, threshold=0.05, resolve_limit=0.10,
@@ -233,10 +233,10 @@ def test_a_joint_step_is_judged_beyond_the_noise():
 
 
 def test_a_metal_is_judged_beyond_the_renderers_metals_not_their_white_lambertians():
-    from brdfremap.core.agreement import _MEASURED, calibration_floors, metal_kind
-    from brdfremap.core.appearance import Appearance
-    from brdfremap.core.scene import ProbeScene
-    from brdfremap.core.validation import held_out_scenes
+    from brdfremap.core.job.agreement import _MEASURED, calibration_floors, metal_kind
+    from brdfremap.core.data.appearance import Appearance
+    from brdfremap.core.data.scene import ProbeScene
+    from brdfremap.core.job.validation import held_out_scenes
     from brdfremap_example.adapter import ToyAdapter
 
     class Toy(ToyAdapter):

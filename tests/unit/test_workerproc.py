@@ -5,8 +5,8 @@ import textwrap
 
 import pytest
 
-from brdfremap.core.errors import RenderError
-from brdfremap.core.workerproc import JsonLinesWorker
+from brdfremap.core.data.errors import RenderError
+from brdfremap.core.run.workerproc import JsonLinesWorker
 
 ECHO = textwrap.dedent("""
     import json, sys, os

@@ -13,7 +13,7 @@ import numpy as np
 
 
 def image(scene_doc, albedo):
-    from brdfremap.core.scene import Camera, PointLight, ProbeScene, Sphere
+    from brdfremap.core.data.scene import Camera, PointLight, ProbeScene, Sphere
     from brdfremap.core.testing import analytic_lambert
 
     cam, light = scene_doc["camera"], scene_doc["light"]

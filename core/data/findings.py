@@ -109,7 +109,7 @@ class RenderersFloor(_Note):
 
 class RenderersDisagree(_Finding):
     """The two renderers draw this kind of material otherwise under one condition: its error there is
-    theirs, not the model's (`core.agreement`)."""
+    theirs, not the model's (`core.job.agreement`)."""
 
     kind: Literal["renderers_disagree"] = "renderers_disagree"
     condition: str

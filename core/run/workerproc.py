@@ -17,7 +17,7 @@ import time
 import weakref
 from typing import Any
 
-from .errors import RenderError
+from ..data.errors import RenderError
 
 
 def _prctl():

@@ -15,13 +15,13 @@ from typing import Any
 
 from pydantic import Field
 
-from .engine.tuning import ENGINE_VERSION, Tuning
-from .errors import ConfigError
-from .model import Strict
-from .plugins import AdapterRegistry
-from .scene import MAX_SPP, ProbeScene
-from .schemas import Material, ModelSpec, Value
-from .settings import Settings
+from ..data.errors import ConfigError
+from ..data.model import Strict
+from ..data.scene import MAX_SPP, ProbeScene
+from ..data.schemas import Material, ModelSpec, Value
+from ..data.settings import Settings
+from ..engine.tuning import ENGINE_VERSION, Tuning
+from ..host.plugins import AdapterRegistry
 
 
 class Target(Strict):

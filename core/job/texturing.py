@@ -14,12 +14,12 @@ from typing import Any
 import numpy as np
 from pydantic import Field
 
-from .errors import RenderError
-from .metrics import beyond_noise, delta_e_itp, relative_rmse
-from .model import Strict
-from .protocol import Adapter, check_image
-from .scene import ProbeScene
-from .textures import Texture, TextureMap, encode, kind_of_file
+from ..data.errors import RenderError
+from ..data.metrics import beyond_noise, delta_e_itp, relative_rmse
+from ..data.model import Strict
+from ..data.scene import ProbeScene
+from ..data.textures import Texture, TextureMap, encode, kind_of_file
+from ..host.protocol import Adapter, check_image
 
 CHECK_RESOLUTION, CHECK_SPP = 64, 32
 """The textured check's least resolution and samples (each side twice, for its noise): the scene's
@@ -86,8 +86,8 @@ class Texturing:
 def texture_result(resolved, source: Adapter | None, target: Adapter, params: dict[str, Any]) -> Texturing:
     """Remap the job's textures through its table, and render the textured check (not without a
     ``source`` adapter: `remap --table --no-render`)."""
-    from .tables import TableMap, read_table
-    from .tables.texels import read_inputs, remap_texels
+    from ..tables import TableMap, read_table
+    from ..tables.texels import read_inputs, remap_texels
 
     job = resolved.job
     lk = job.lookup
@@ -127,7 +127,7 @@ def textured_findings(record: Textured, threshold: float, resolve_limit: float) 
     """What the textured check and the remap say for the verdict: the conditions (resolved by their
     noise) where the textured result is over the threshold beyond the noise; the means written and
     the texels clamped, as a note."""
-    from .findings import TexturedAbove, TexturedCondition, TexturedNotes
+    from ..data.findings import TexturedAbove, TexturedCondition, TexturedNotes
 
     above = [TexturedCondition(condition=c.condition, error=c.error, beyond_noise=c.beyond_noise)
              for c in record.checks if c.noise_floor <= resolve_limit and c.beyond_noise > threshold]
@@ -151,7 +151,7 @@ def _check(resolved, source: Adapter, target: Adapter, inputs, maps: dict[str, n
            params: dict[str, Any], filt: str):
     """Both textured materials on the probe sphere under the job's lights and under the studio
     environment, each side twice (its noise)."""
-    from .scene import EnvironmentLight
+    from ..data.scene import EnvironmentLight
 
     job = resolved.job
     why = _cannot_check(resolved, source, target)

@@ -16,9 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 from pydantic import ValidationError
 
-from .engine.results import Check, Validation
-from .metrics import beyond_noise, delta_e_itp, relative_rmse
-from .scene import MAX_SEED, MAX_SPP, EnvironmentLight, PointLight, ProbeScene
+from ..data.metrics import beyond_noise, delta_e_itp, relative_rmse
+from ..data.scene import MAX_SEED, MAX_SPP, EnvironmentLight, PointLight, ProbeScene
+from ..engine.results import Check, Validation
 
 SPP_FACTOR, MIN_SPP = 4, 64
 SEED_OFFSET = 1000
@@ -33,7 +33,7 @@ class Condition:
     description: str
     lights: tuple[PointLight | EnvironmentLight, ...]
     given: bool = False
-    """The job's own lights, when the fit ran under others (`core.fitscene`)."""
+    """The job's own lights, when the fit ran under others (`core.job.fitscene`)."""
 
 
 CONDITIONS = (

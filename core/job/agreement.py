@@ -23,11 +23,11 @@ from typing import Callable
 
 import numpy as np
 
-from .appearance import Appearance
-from .engine.results import WHITE, Agreement, Disagreement
-from .metrics import beyond_noise, relative_rmse
-from .protocol import Adapter, check_image
-from .scene import EnvironmentLight, ProbeScene
+from ..data.appearance import Appearance
+from ..data.metrics import beyond_noise, relative_rmse
+from ..data.scene import EnvironmentLight, ProbeScene
+from ..engine.results import WHITE, Agreement, Disagreement
+from ..host.protocol import Adapter, check_image
 
 BLOCK = 8
 _MEASURED: dict[tuple, tuple[float, float]] = {}

@@ -19,19 +19,19 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from .account import Ledger, Metered, purpose
-from .atomic import why
-from .engine import ProgressFn, remap
-from .errors import RemapError, RenderError
+from ..data.account import Ledger, Metered, purpose
+from ..data.atomic import why
+from ..data.errors import RemapError, RenderError
+from ..data.findings import SmoothHeld
+from ..data.imageio import write_exr, write_previews
+from ..data.schemas import Value
+from ..engine import ProgressFn, remap
+from ..host.plugins import AdapterRegistry, collect_adapters
+from ..host.protocol import Adapter
 from .fitscene import choose as choose_scene
-from .imageio import write_exr, write_previews
 from .job import Job, Resolved, resolve
-from .plugins import AdapterRegistry, collect_adapters
-from .protocol import Adapter
 from .renders import CachedRenderer, ProbeRenders
 from .report import FileRecord, Report, build_report
-from .schemas import Value
-from .findings import SmoothHeld
 from .texturing import Texturing, texture_result, textured_findings
 
 
@@ -178,7 +178,7 @@ def _textured_files(d: Path, adapter: Adapter, model: str, texturing: Texturing)
 
 def lookup_notes(job: Job) -> list:
     """The finding that says a lookup's parameters came from a table ([] for a fit)."""
-    from .findings import TableLookup
+    from ..data.findings import TableLookup
 
     lk = job.lookup
     if lk is None:

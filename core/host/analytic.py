@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .scene import EnvironmentLight, PointLight, ProbeScene
+from ..data.scene import EnvironmentLight, PointLight, ProbeScene
 
 
 @dataclass
@@ -85,9 +85,9 @@ def scene_for(spec, scene: ProbeScene, environment_ok: bool = True, params: dict
 
 def environment_irradiance(radiance: np.ndarray, normals: np.ndarray, width: int = 128) -> np.ndarray:
     """Irradiance (…, 3) an unoccluded surface of these normals receives from an equirectangular
-    map (H x W x 3, `core.environment`'s orientation), integrated over the map box-averaged
+    map (H x W x 3, `core.data.environment`'s orientation), integrated over the map box-averaged
     down to ``width`` columns: a few tenths of a percent from the exact integral for smooth maps."""
-    from .environment import pixel_directions
+    from ..data.environment import pixel_directions
 
     h, w = radiance.shape[:2]
     f = max(1, w // width)
@@ -108,7 +108,7 @@ def environment_irradiance(radiance: np.ndarray, normals: np.ndarray, width: int
 def analytic_lambert(scene: ProbeScene, albedo: float | tuple[float, float, float] = 0.8) -> np.ndarray:
     """Radiance image of a Lambertian sphere under the scene's lights: albedo / pi * E. Silhouette
     pixels are point-sampled here but box-filtered by renderers: compare on ``sphere_hits().interior``."""
-    from .environment import radiance
+    from ..data.environment import radiance
 
     hits = sphere_hits(scene)
     e = sum(point_light_irradiance(scene, hits, light)[0] for light in scene.point_lights)
@@ -145,7 +145,7 @@ def analytic_glass(scene: ProbeScene, ior: float = 1.5, supersample: int = 3, bo
     internal reflections (in a sphere every one meets the boundary at the entry angle: the same
     Fresnel, no total internal reflection). Point lights show in it as points: they add nothing.
     Pixels are averaged over ``supersample``² rays (a renderer's box filter)."""
-    from .environment import lookup, radiance
+    from ..data.environment import lookup, radiance
 
     env = scene.environment
     out = np.zeros((scene.resolution, scene.resolution, 3))

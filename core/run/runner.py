@@ -13,13 +13,13 @@ import time
 from dataclasses import dataclass, replace
 from typing import Callable
 
+from ..data.errors import ConfigError, RemapError, RenderError
+from ..engine import ProgressFn
+from ..job.execute import run_job
+from ..job.job import Job
+from ..job.report import Report, for_job
 from . import interrupt
-from .engine import ProgressFn
-from .errors import ConfigError, RemapError, RenderError
-from .execute import run_job
 from .executors import Workers, worker_deaths
-from .job import Job
-from .report import Report, for_job
 from .store import Store
 
 

@@ -6,7 +6,7 @@ from a mismatch. The source's own render noise says so before any fit. Then, in 
 
 1. more samples, while the noise they predict (noise ∝ 1/√spp) reaches `GOAL` within
    `MAX_SPP_FACTOR` times the scene's samples;
-2. else the studio environment (`core.environment`) instead of the scene's lights (at half the
+2. else the studio environment (`core.data.environment`) instead of the scene's lights (at half the
    resolution for a smooth source: `ENV_MIN_RESOLUTION`), where both
    adapters render one: a near-mirror reflects its whole surroundings, which a point light
    reduces to one sub-pixel spot (bench/validation.py measures both);
@@ -25,8 +25,8 @@ from typing import Callable
 
 import numpy as np
 
-from .metrics import l2, relative_rmse
-from .scene import MAX_SPP, EnvironmentLight, PointLight, ProbeScene, View
+from ..data.metrics import l2, relative_rmse
+from ..data.scene import MAX_SPP, EnvironmentLight, PointLight, ProbeScene, View
 from .validation import place_light
 
 GOAL = 0.03
@@ -83,7 +83,7 @@ def choose(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, enviro
 
 BACK = PointLight(theta=100.0)
 """The back light of a fit's second view: behind the sphere's outline, 100 degrees from the view (the
-held-out grazing and rim lights are at 80 and 120, `core.validation`), on the side opposite the
+held-out grazing and rim lights are at 80 and 120, `core.job.validation`), on the side opposite the
 scene's first light (`with_back_light`)."""
 MAX_SCALE = 1000.0
 """The back light's intensity is at most this many times the scene's light's (a source nearly black

@@ -10,8 +10,8 @@ from typing import Any
 
 import pluggy
 
+from ..data.errors import AdapterUnavailableError, ConfigError
 from . import hookspecs
-from .errors import AdapterUnavailableError, ConfigError
 
 GROUP = "brdfremap"
 

@@ -14,9 +14,9 @@ from typing import Callable
 
 import numpy as np
 
-from .imageio import HALF_EPS
-from .metrics import beyond_noise, eight_bit, relative_rmse
-from .scene import EnvironmentLight, PointLight, ProbeScene
+from ..data.imageio import HALF_EPS
+from ..data.metrics import beyond_noise, eight_bit, relative_rmse
+from ..data.scene import EnvironmentLight, PointLight, ProbeScene
 from .analytic import analytic_glass, analytic_lambert, scene_for, sphere_hits
 
 SCENE = ProbeScene(resolution=48, spp=16)

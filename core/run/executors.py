@@ -11,7 +11,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator
 
-from .errors import ConfigError
+from ..data.errors import ConfigError
 
 MAX_JOBS = 256
 

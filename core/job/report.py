@@ -13,19 +13,19 @@ from typing import Any
 
 from pydantic import Field, computed_field
 
-from .account import Account
-from .engine.results import Check, EngineResult, StageResult
-from .engine.tuning import ENGINE_VERSION
-from .errors import ConfigError
-from .findings import Finding, Status, Verdict
+from ..data.account import Account
+from ..data.errors import ConfigError
+from ..data.findings import Finding, Status, Verdict
+from ..data.metrics import beyond_noise
+from ..data.model import Strict as _Strict
+from ..data.model import WithDerived
+from ..data.scene import ProbeScene
+from ..data.versioned import JsonFormat, check_version, parse, read_json
+from ..engine.results import Check, EngineResult, StageResult
+from ..engine.tuning import ENGINE_VERSION
 from .job import Job, Resolved
-from .metrics import beyond_noise
-from .model import Strict as _Strict
-from .model import WithDerived
 from .renders import rounded
-from .scene import ProbeScene
 from .texturing import Textured
-from .versioned import JsonFormat, check_version, parse, read_json
 
 SCHEMA_VERSION = 7
 """Bump whenever the fields change (an older reader refuses a field it does not know). 4: a job's
@@ -181,7 +181,7 @@ def build_report(resolved: Resolved, result: EngineResult, *, start: dict, deriv
                  adapters: dict[str, dict[str, Any]], files: list[FileRecord],
                  textures: Textured | None = None, account: Account | None = None) -> Report:
     """The report, in one place: ``derived`` holds the source's and the target's derived quantities."""
-    from . import __version__
+    from .. import __version__
 
     job = resolved.job
     src, tgt = job.source, job.target

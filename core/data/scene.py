@@ -74,7 +74,7 @@ class PointLight(_Strict):
 
 class EnvironmentLight(_Strict):
     """Light from every direction, infinitely far: an equirectangular map of radiance (see
-    `core.environment` for its orientation). Only surfaces see it: the background stays black."""
+    `core.data.environment` for its orientation). Only surfaces see it: the background stays black."""
 
     type: Literal["environment"]
     map: str = Field("studio", description="'studio' (built in: key, fill and rim lights), 'constant' (radiance 1 "

@@ -11,16 +11,16 @@ from typing import Any
 
 import numpy as np
 
-from .account import purpose
-from .cache import RenderCache, render_key
-from .engine.levels import Level
+from ..data.account import purpose
+from ..data.metrics import relative_rmse
+from ..data.scene import ProbeScene
+from ..data.schemas import ModelSpec, Value
+from ..engine.levels import Level
+from ..engine.results import Agreement, Validation
+from ..engine.schedule import highlight_pixels
+from ..host.protocol import Adapter, check_image
 from .agreement import agreement, metal_kind
-from .engine.results import Agreement, Validation
-from .metrics import relative_rmse
-from .protocol import Adapter, check_image
-from .scene import ProbeScene
-from .schemas import ModelSpec, Value
-from .engine.schedule import highlight_pixels
+from .cache import RenderCache, render_key
 from .validation import held_out_scenes, point_resolution, validate
 
 
@@ -116,7 +116,7 @@ class ProbeRenders:
         self.job_scene = given if given is not None else scene
         """The job's scene: the held-out lights take its camera, size and samples."""
         self.other_lights = _first_view(self.job_scene.with_(spp=scene.spp)) != _first_view(scene)
-        """The fit ran under other lights than the job's (`core.fitscene`): those are checked too.
+        """The fit ran under other lights than the job's (`core.job.fitscene`): those are checked too.
         (A fit at more samples of the same lights, or with a back light's view added below them,
         measured the job's scene already.)"""
         self.given_noise = given_noise
@@ -168,7 +168,7 @@ class ProbeRenders:
         return relative_rmse(first, self.target(params, scene=self.scene.with_(seed=self.scene.seed + 1)))
 
     def validation(self, params: dict[str, Value]) -> Validation:
-        """Source and target under the held-out conditions (`core.validation`), through the caches."""
+        """Source and target under the held-out conditions (`core.job.validation`), through the caches."""
 
         def problems(scene: ProbeScene) -> str | None:
             for side in (self.source, self.target):
@@ -186,7 +186,7 @@ class ProbeRenders:
 
     def point_resolution(self) -> int:
         """The frontal point-light conditions' resolution, from the source's highlight (its specular
-        lobe where it isolates one) on the job's scene (`core.validation.point_resolution`); the
+        lobe where it isolates one) on the job's scene (`core.job.validation.point_resolution`); the
         scene's when the fit ran elsewhere, the job's lights are not point lights, or the source
         lets light through."""
         if self.other_lights or self.job_scene.views or self.job_scene.environment is not None \

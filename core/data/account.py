@@ -100,7 +100,7 @@ class Metered:
     adapter's own. Two Metered of one adapter (a job within one renderer) share the renderer.
     Each call counts as a render: one the adapter serves from its own cache (Cycles' lobe passes,
     kept from a render of the same parameters) counts too, in next to no time, as the report's
-    render counts do. The reference glasses of `core.agreement` are counted here and not in the
+    render counts do. The reference glasses of `core.job.agreement` are counted here and not in the
     report's counts of the fit's renders."""
 
     def __init__(self, adapter: Any, side: Side, ledger: Ledger):

@@ -22,10 +22,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator
 
-from .atomic import why
-from .errors import ConfigError
-from .execute import IMAGES, Outcome
-from .report import NewerReportError, Report, read_report
+from ..data.atomic import why
+from ..data.errors import ConfigError
+from ..job.execute import IMAGES, Outcome
+from ..job.report import NewerReportError, Report, read_report
 
 RESULT = "result.json"
 STAGING = ".staging-"

@@ -1,0 +1,165 @@
+"""The adapter contract. An adapter renders the probe scene with one material model."""
+
+from __future__ import annotations
+
+import abc
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+
+from ..data.appearance import Appearance
+from ..data.errors import RenderError
+from ..data.scene import ProbeScene
+from ..data.schemas import ModelSpec, Value
+from ..data.textures import Texture, TextureMap
+
+
+@dataclass(frozen=True)
+class ModelChoice:
+    model: str
+    fix: dict[str, Value]
+    why: str
+
+
+class Adapter(abc.ABC):
+    """Base class for renderer adapters.
+
+    Class attributes are read without constructing the adapter (so listing adapters imports
+    no renderer); the constructor may import the renderer and start workers.
+    """
+
+    name: ClassVar[str]
+    version: ClassVar[str] = "1"
+    """This adapter's own version: bump it when a change would change its renders (it is part of
+    every job's key, so stored results made with the old renders are redone)."""
+    summary: ClassVar[str] = ""
+    install_hint: ClassVar[str] = ""
+    models: ClassVar[dict[str, ModelSpec]] = {}
+    light_types: ClassVar[frozenset[str]] = frozenset({"point"})
+    """The light types of `core.data.scene` this adapter realises, in the same units and orientation
+    as every other (its calibration tests cover each)."""
+    textures: ClassVar[bool] = False
+    """Whether it renders textures (`render_textured`) and writes them into its native files, for the
+    parameters each model lists as `texturable`."""
+    calibration: ClassVar[tuple[str, dict] | None] = None
+    """A white diffuse material of albedo 0.8 (model, params), which `remap check` renders against
+    the analytic radiance; None: the adapter has none to offer."""
+    glasses: ClassVar[dict[str, tuple[str, dict]]] = {}
+    """Clear glasses of IOR 1.5 (model, params) by kind: "smooth" (perfectly smooth), "rough" (GGX,
+    α 0.1). An adapter that declares them renders light through a sphere (`ModelSpec.transmits`);
+    `remap check` and the verdict compare them with another adapter's."""
+    metals: ClassVar[dict[str, tuple[str, dict]]] = {}
+    """Aluminium (η 1.66, 0.88, 0.52; k 9.22, 6.27, 4.84) by kind: "smooth" (GGX, α 0.01), "rough"
+    (GGX, α 0.09). A metal's held-out error is judged beyond how far two adapters' metals of its
+    kind differ, as a dielectric's is beyond their white Lambertians (`core.job.agreement`)."""
+
+    @classmethod
+    def scene_problem(cls, scene: ProbeScene) -> str | None:
+        """Why this adapter cannot render ``scene`` (a fact, no advice), or None: checked before
+        any render. The default refuses a light type it does not declare. Must be cheap: no renderer import."""
+        missing = sorted(scene.light_types() - set(cls.light_types))
+        if missing:
+            return f"has no {' or '.join(missing)} light (it renders {', '.join(sorted(cls.light_types))} lights)"
+        return None
+
+    @classmethod
+    def unavailable_reason(cls) -> str | None:
+        """Why this adapter cannot run here, or None. Must be cheap: no renderer import."""
+        return None
+
+    @abc.abstractmethod
+    def render(self, model: str, params: dict[str, Value], scene: ProbeScene, lobe: str | None = None) -> np.ndarray:
+        """Render the probe scene: linear float32 H x W x 3, no tone mapping.
+
+        ``params`` is complete and validated (see ``ModelSpec.complete``). ``lobe`` is None for
+        the full material, or "diffuse" / "specular" for that lobe alone."""
+
+    def render_textured(self, model: str, params: dict[str, Value], maps: dict[str, TextureMap],
+                        scene: ProbeScene) -> np.ndarray:
+        """Render the probe sphere with some parameters driven by images (``maps``, of `texturable`
+        parameters, their values used as they are: no colour conversion), laid over the sphere by
+        `core.data.textures`' texture coordinates; the other parameters as ``params`` gives them. Only
+        for an adapter whose ``textures`` is true."""
+        raise RenderError(f"adapter {self.name!r} does not render textures")
+
+    def render_batch(self, requests: list[tuple[str, dict[str, Value], ProbeScene, str | None]]) -> list[np.ndarray]:
+        """Several renders (model, params, scene, lobe) at once; an adapter with several workers
+        runs them in parallel. The default renders them one after the other."""
+        return [self.render(*r) for r in requests]
+
+    @classmethod
+    def identity(cls) -> str:
+        """What determines this adapter's renders besides a job's inputs, as one string: its
+        `version`, and the renderer's version and configuration where those vary between
+        machines. Part of every job's key (a renderer upgraded, or a worker configured otherwise,
+        gets its results redone). Must be cheap: no renderer import."""
+        return cls.version
+
+    @classmethod
+    def environment(cls) -> dict[str, Any]:
+        """Facts for `remap adapters` without rendering (version, variant and why). May be slow-ish."""
+        return {}
+
+    def describe(self) -> dict[str, Any]:
+        """Runtime facts for reports (renderer version, variant, device)."""
+        return {}
+
+    def derived(self, model: str, params: dict[str, Value]) -> dict[str, Value]:
+        """Quantities that follow from the parameters, for reports and experiment plots (e.g. a
+        conductor's normal-incidence reflectivity from its complex IOR). Must not render."""
+        return {}
+
+    def appearance(self, model: str, params: dict[str, Value]) -> Appearance | None:
+        """The material in renderer-neutral terms, as an exporter would read it, or None when this
+        model has no such reading. Used as a source: it gives the fit its informed start. Must not render."""
+        return None
+
+    def from_appearance(self, model: str, appearance: Appearance, base: dict[str, Value]) -> dict[str, Value]:
+        """This model's parameters for a neutral description by the exporters' conventions (the
+        fit's informed start; the fit corrects them), or {} when there is no such conversion.
+        ``base`` is the model's complete parameters as they stand (defaults, --fix), for a
+        conversion that depends on one the fit keeps. Only fitted parameters are used; values
+        out of bounds are clipped by the caller. Must not render."""
+        return {}
+
+    def model_for(self, appearance: Appearance) -> "ModelChoice | None":
+        """The model a material of this appearance converts to when the user names only this
+        adapter (`remap convert --to ADAPTER`), with the choices to hold (a distribution the
+        source has) and why, in words; None: no choice without a model named. Must not render."""
+        return None
+
+    def notes(self, model: str, params: dict[str, Value]) -> list[str]:
+        """What the renderer does to these parameters that the image cannot show the optimiser,
+        e.g. a reflectance it trims to conserve energy. A note makes a fitted result unreliable."""
+        return []
+
+    def write_native(self, model: str, params: dict[str, Value], out_dir: Path,
+                     textures: dict[str, Texture] | None = None) -> list[Path]:
+        """Write the material in the renderer's own form; return the files written. ``textures``
+        (an adapter whose ``textures`` is true): parameters read from images already in ``out_dir``
+        (their `file` a name there), referenced by the material as relative paths."""
+        return []
+
+    def close(self) -> None:
+        """Release workers and renderer state."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def check_image(img: Any, scene: ProbeScene, who: str) -> np.ndarray:
+    """Enforce the contract on an adapter's output; a bad image is a RenderError, never a bad fit."""
+    arr = np.asarray(img)
+    want = (scene.resolution, scene.resolution, 3)
+    if arr.shape != want:
+        raise RenderError(f"{who}: image has shape {arr.shape}, expected {want}")
+    arr = arr.astype(np.float32, copy=False)
+    if not np.isfinite(arr).all():
+        bad = int((~np.isfinite(arr)).sum())
+        raise RenderError(f"{who}: image has {bad} NaN or Inf values")
+    return arr
