@@ -92,7 +92,7 @@ SUMMARY_SCHEMA_VERSION = 1
 class Cliff(Strict):
     before: str = Field(description="The point before the jump.")
     after: str = Field(description="The point after it.")
-    why: str
+    why: list[str] = Field(description="What jumped there, one line for each parameter or error.")
     short: str
 
 
