@@ -189,7 +189,7 @@ class BlenderState:
 
     def _world(self, scene, env: dict | None) -> None:
         """Black, or the environment map: the direction d of the scene's convention (u = atan2(x, -z)
-        / 2pi, v = acos(y) / pi: core.environment) is (d_z, d_x, d_y) in Blender's equirectangular
+        / 2pi, v = acos(y) / pi: core.data.environment) is (d_z, d_x, d_y) in Blender's equirectangular
         lookup (u = 0.5 - atan2(y, x) / 2pi, up +z; found alike by trying every axis order and sign
         against the analytic image: tests/adapters/test_lights.py). Unseen by the camera (a transparent film: the background stays black)."""
         bpy = self.bpy

@@ -4,12 +4,12 @@ formats, and at one material."""
 from __future__ import annotations
 
 import argparse
-from typing import Any
 import json
 import os
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 

@@ -1,6 +1,7 @@
-"""The tool's own JSON files read back: one reader for every versioned format (a result's report,
-a remap table, a conversion's, a lookup's and an experiment's summaries). Each names its format,
-the versions this tool reads, and what to do with another; an edited file is refused by its digest."""
+"""The tool's own versioned JSON files read back, through one reader: a result's report and a remap
+table. Each names its format, the versions this tool reads, and what to do with another; an edited
+file is refused by its digest. (`convert.json`, `lookup.json` and `summary.json` carry a
+`schema_version` too, for readers of them; the tool itself does not read them back.)"""
 
 from __future__ import annotations
 

@@ -6,6 +6,7 @@ alone is redone; the table, summary and plots are rebuilt from the reports at th
 
 from __future__ import annotations
 
+import json
 import re
 import time
 from pathlib import Path
@@ -22,7 +23,7 @@ from ..run.store import Store, owned
 from .analysis import Leg, Row, detect_cliffs, roundtrip_fit
 from .plots import cliff_figure, roundtrip_plot, sweep_plot
 from .spec import Experiment, ExperimentKind, Point, label, points_of
-from .table import ExperimentResult, ExperimentSummary, summary, write_csv
+from .table import ExperimentResult, summary, write_csv
 
 
 def run_experiment(exp: Experiment, file: str, out: str | Path, registry: AdapterRegistry, workers: Workers, *,
@@ -140,10 +141,12 @@ def _check_outputs(folder: Path, file: str) -> None:
 def _previous_cliffs(folder: Path) -> set[str]:
     """The cliff figures the previous run listed in its summary (the only ones this run may remove)."""
     try:
-        doc = ExperimentSummary.model_validate_json((folder / "summary.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):  # none, or not one of ours (pydantic's ValidationError is a ValueError)
+        doc = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+        names = doc.get("files", [])  # any version's summary: only its list of files is needed
+    except (OSError, ValueError, AttributeError):
         return set()
-    return {n for n in doc.files if re.fullmatch(r"cliff-\d+\.png", n)}
+    return {n for n in names if isinstance(n, str) and re.fullmatch(r"cliff-\d+\.png", n)} if \
+        isinstance(names, list) else set()
 
 
 def _write_outputs(folder: Path, exp: Experiment, rows: list[Row], cliffs: list[dict], fit) -> list[Path]:

@@ -96,6 +96,17 @@ class Cliff(Strict):
     short: str
 
 
+class RoundtripFit(Strict):
+    """A roundtrip's line of recovered against original values (NaN where fewer than two points, or no
+    spread, leave none to fit: written as NaN, as before)."""
+
+    points: int
+    slope: float
+    intercept: float
+    r2: float
+    rms_from_unit_line: float
+
+
 class ExperimentSummary(Strict):
     """`summary.json`: an experiment's points and what they showed (`remap schema experiment-summary`)."""
 
@@ -108,7 +119,8 @@ class ExperimentSummary(Strict):
     after_a_cliff: int
     model_mismatch_only: int
     cliffs: list[Cliff]
-    roundtrip_fit_unflagged: Any = Field(description="A roundtrip's fit of recovered against original (None: a sweep).")
+    roundtrip_fit_unflagged: RoundtripFit | None = Field(description="A roundtrip's fit of recovered against original "
+                                                                     "(None: a sweep).")
     median_relative_rmse: float | None
     renders: int = Field(description="Target renders of this run (resumed points not counted).")
     renders_all_points: int

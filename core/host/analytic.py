@@ -176,6 +176,3 @@ def analytic_glass(scene: ProbeScene, ior: float = 1.5, supersample: int = 3, bo
                 weight = weight * f
             out += np.where(mask[..., None], colour, 0.0)
     return (out / supersample ** 2).astype(np.float32)
-
-
-# -- the adapter contract test kit ------------------------------------------------------

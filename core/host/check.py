@@ -113,11 +113,13 @@ def determinism(render: Callable, models: dict) -> Row:
     return Row(name, True, f"{len(models)} model(s), bit for bit")
 
 
-def images(render: Callable, models: dict) -> Row:
+def images(render: Callable, models: dict, environment: bool = True) -> Row:
+    """Each model's image at the probe (a perfectly smooth one under the studio where the adapter
+    renders an environment: ``environment``, as a fit would see it)."""
     name = "images: RGB float, finite, lit, black background"
     n = SCENE.resolution
     for model, spec in models.items():
-        img = np.asarray(render(model, spec.complete({}), scene_for(spec, SCENE)))
+        img = np.asarray(render(model, spec.complete({}), scene_for(spec, SCENE, environment)))
         if img.shape != (n, n, 3) or not np.isfinite(img).all() or img.max() <= 0:
             top = float(np.nanmax(img)) if img.size and not np.isnan(img).all() else float("nan")
             return Row(name, False, f"model {model}: shape {img.shape}, max {top:.3g}",
@@ -203,7 +205,7 @@ def transmission(render: Callable, models: dict, glass: tuple[str, dict] | None,
 def run(render: Callable, models: dict, white: tuple[str, dict] | None, glass: tuple[str, dict] | None = None,
         environment: bool = False) -> list[Row]:
     """Every check; ``render(model, params, scene, lobe=None) -> image``."""
-    first = images(render, models)
+    first = images(render, models, environment)
     if not first.passed:  # the others index the image: say they did not run rather than fail on its shape
         return [first] + [Row(name, None, "not run: the images are not right (see images)") for name in (
             "units", "orientation", "determinism", "lobes", "precision", "transmission")]

@@ -23,14 +23,15 @@ from .maps import Grid, Regressor, build
 from .outputs import ERROR, Output, assemble, target_value
 from .spec import Layout, TableSpec
 
-TABLE_SCHEMA_VERSION = 5
+TABLE_SCHEMA_VERSION = 6
 """2: an output the channels share is looked up at each channel's grey level and weighted (was: at the
 mean grey level); a table of 1 is built again into its folder, which reuses its fits. 3: coloured
 points and maps corrected by them (`colours`); a table of 2 has neither and is read as it is. 4: path
 following along axes of the grid (`spec.follow`); tables of 2 and 3 have none and are read as they are.
 5: an axis's values may be listed (`values`, closer together where the map bends); earlier tables have
-evenly spaced ones and are read as they are."""
-READS = (2, 3, 4, 5)
+evenly spaced ones and are read as they are. 6: the build record counts its cliffs
+(`BuildRecord.cliffs`); a table of 5 has none and is read as it is."""
+READS = (2, 3, 4, 5, 6)
 
 
 class PointVerdict(StrEnum):

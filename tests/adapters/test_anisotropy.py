@@ -43,7 +43,7 @@ def _principal_slope(img: np.ndarray) -> float:
 
 def test_cycles_rotation_turns_the_tangent_counter_clockwise(cycles_adapter):
     """An eighth of a turn from the latitudes (horizontal at the front) is '/', minus an eighth '\\';
-    the neutral reading's rotation uses this sense (core.appearance)."""
+    the neutral reading's rotation uses this sense (core.data.appearance)."""
     assert _principal_slope(_cycles_brushed(cycles_adapter, 0.3, 0.02, rotation=0.125)) > 0
     assert _principal_slope(_cycles_brushed(cycles_adapter, 0.3, 0.02, rotation=0.875)) < 0
 
