@@ -2,8 +2,8 @@
 
     python bench/readme_figure.py [--out docs/readme-remap.png]
 
-Runs two remaps with `remap` (a same-family pair that matches to the render noise, and the main
-job, a model mismatch) into out/readme/, then shows each one's previews in a row: source and
+Runs two remaps with `remap` (a same-family pair that matches to the render noise under every
+light, and a model mismatch) into out/readme/, then shows each one's previews in a row: source and
 remap through the display transform with one exposure, and the error map with its scale."""
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 CASES = [
-    ("Mitsuba copper (Beckmann α 0.2) → Cycles Glossy", "copper.yaml",
-     ["--adapter", "cycles", "--model", "glossy", "--fix", "distribution=beckmann"]),
+    ("Mitsuba copper (Beckmann α 0.2) → Cycles Metallic", "copper.yaml",
+     ["--adapter", "cycles", "--model", "metallic", "--fix", "distribution=beckmann"]),
     ("Mitsuba gold (Beckmann α 0.1) → Cycles Principled", "gold.yaml", ["--adapter", "cycles", "--model", "principled"]),
 ]
 
