@@ -97,18 +97,10 @@ class ProbeSpheres:
             self.probe.hide_render = anisotropic
 
 
-class BlenderState:
-    def __init__(self):
-        import bpy
+class SceneBuilder:
+    """The probe scene in Blender: built from the request's scene when its geometry changes
+    (camera, world, lights, the sphere and its passes), its per-render settings on every request."""
 
-        self.bpy = bpy
-        self.scene_key = None
-        self.passes = None
-        self.materials = {}
-        self.probes = None
-        self.depth = None
-
-    # -- scene -------------------------------------------------------------------------
     def setup_scene(self, sc_json: dict) -> None:
         # Resolution, samples and seed change between the coarse, polish and final levels of
         # one fit: set them on every request; rebuild only when the geometry changes.
@@ -232,7 +224,11 @@ class BlenderState:
         obj.location = tuple(light["position"])
         scene.collection.objects.link(obj)
 
-    # -- materials ---------------------------------------------------------------------
+
+class MaterialNodes:
+    """Materials as node trees: one per model, reused and updated in place; a textured one made
+    for its request and dropped after it."""
+
     def new_material(self, model: str, name: str):
         """A material whose surface is the model's BSDF node: (material, node)."""
         from brdfremap.adapters.cycles.material import FIXED_PROPS, NODES
@@ -295,7 +291,20 @@ class BlenderState:
         self.set_values(bsdf, model, params)
         return mat
 
-    # -- requests ----------------------------------------------------------------------
+
+class BlenderState(SceneBuilder, MaterialNodes):
+    """What the worker keeps between requests, and the requests it answers (render, save, read)."""
+
+    def __init__(self):
+        import bpy
+
+        self.bpy = bpy
+        self.scene_key = None
+        self.passes = None
+        self.materials = {}
+        self.probes = None
+        self.depth = None
+
     def render(self, req: dict) -> dict:
         t0 = time.perf_counter()
         self.setup_scene(req["scene"])
