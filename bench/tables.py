@@ -38,6 +38,7 @@ def accuracy(args) -> None:
     from brdfremap.core.host.plugins import collect_adapters
     from brdfremap.core.run.runner import Runner, Task
     from brdfremap.core.data.schemas import Material
+    from brdfremap.core.data.settings import Validation
     from brdfremap.core.run.store import Store
     from brdfremap.core.tables import TableMap, read_table
     from brdfremap.core.tables.lookup import look_up
@@ -49,7 +50,7 @@ def accuracy(args) -> None:
             t0 = time.perf_counter()
             table = read_table(path)
             spec = table.spec
-            settings = spec.options.for_study().model_copy(update={"validation": "none"})
+            settings = spec.options.for_study().model_copy(update={"validation": Validation.NONE})
             drawn = table.layout.draw(args.n, args.seed)
             store = Store(Path(args.out) / Path(path).resolve().name)
             jobs = [Job(source=Material(adapter=spec.source.adapter, model=spec.source.model,

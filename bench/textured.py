@@ -69,11 +69,12 @@ def _fit_each_texel(table, tmap, registry, w, drawn, out):
     from brdfremap.core.job.job import Job, resolve
     from brdfremap.core.run.runner import Runner, Task
     from brdfremap.core.data.schemas import Material
+    from brdfremap.core.data.settings import Validation
     from brdfremap.core.run.store import Store
     from brdfremap.core.tables.lookup import look_up
 
     spec = table.spec
-    settings = spec.options.for_study().model_copy(update={"validation": "none"})
+    settings = spec.options.for_study().model_copy(update={"validation": Validation.NONE})
     tasks, lookups = [], []
     for i, values in enumerate(drawn):
         src = Material(adapter=spec.source.adapter, model=spec.source.model, params={**spec.source.params, **values},

@@ -20,7 +20,7 @@ from brdfremap.core.data.atomic import temp_beside, write_text_atomic
 from brdfremap.core.data.errors import ConfigError, RenderError
 from brdfremap.core.protocol import Adapter, ModelChoice
 from brdfremap.core.data.scene import ProbeScene
-from brdfremap.core.data.schemas import TRANSMISSION_DEPTH, Value
+from brdfremap.core.data.schemas import Lobe, TRANSMISSION_DEPTH, Value
 from brdfremap.core.data.textures import Texture, TextureMap
 from brdfremap.core.data.scratch import scratch_dir
 from brdfremap.core.run.workerproc import JsonLinesWorker
@@ -87,14 +87,17 @@ def read_passes(path: str, expected: tuple[str, ...] = PASSES) -> dict[str, np.n
     return images
 
 
+LOBE_PASSES = {Lobe.DIFFUSE: ("Diffuse Direct", "Diffuse Color"), Lobe.SPECULAR: ("Glossy Direct", "Glossy Color")}
+"""Each lobe's image: its direct light times its colour pass."""
+
+
 def lobe_image(passes: dict[str, np.ndarray], lobe: str | None) -> np.ndarray:
     if lobe is None:
         return passes["Combined"]
-    if lobe == "diffuse":
-        return passes["Diffuse Direct"] * passes["Diffuse Color"]
-    if lobe == "specular":
-        return passes["Glossy Direct"] * passes["Glossy Color"]
-    raise RenderError(f"cycles: unknown lobe {lobe!r}")
+    if lobe not in LOBE_PASSES:
+        raise RenderError(f"cycles: unknown lobe {lobe!r}")
+    direct, colour = LOBE_PASSES[Lobe(lobe)]
+    return passes[direct] * passes[colour]
 
 
 def depth(transmissive: bool) -> int:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 
-from brdfremap.core.data.appearance import Appearance, Coat, Sheen, as_rgb, conductor_f0, dielectric_f0, ior_from_f0
+from brdfremap.core.data.appearance import Appearance, as_rgb, Coat, conductor_f0, dielectric_f0, ior_from_f0, Kind, Sheen
 from brdfremap.core.data.schemas import Value
 
 _DIST = {"beckmann": "beckmann", "ggx": "ggx", "multi_ggx": "ggx"}
@@ -76,7 +76,7 @@ def _layer_params(a: Appearance) -> dict[str, Value]:
         out.update(sheen_weight=min(a.sheen.weight, 1.0), sheen_tint=a.sheen.tint, sheen_roughness=a.sheen.roughness)
     if a.transmission > 0.0:
         out["transmission_weight"] = a.transmission
-        if a.kind == "dielectric" and max(a.diffuse) == 0.0:
+        if a.kind == Kind.DIELECTRIC and max(a.diffuse) == 0.0:
             out["base_color"] = a.transmittance  # a clear glass: Base Color tints what is transmitted
         if a.ior is not None:
             out["ior"] = a.ior
@@ -89,7 +89,7 @@ _CHOICES = {"principled": ("ggx",), "glossy": ("beckmann", "ggx"), "metallic": (
 
 def from_appearance(model: str, a: Appearance, base: dict[str, Value]) -> dict[str, Value]:
     """This Cycles model's parameters for a neutral description, by the exporters' conventions."""
-    metal = a.kind == "conductor"
+    metal = a.kind == Kind.CONDUCTOR
     out: dict[str, Value] = {}
     if a.alpha is not None and model != "diffuse":
         out["roughness"] = math.sqrt(a.alpha)
@@ -124,7 +124,7 @@ def model_for(a: Appearance) -> tuple[str, dict[str, Value], str]:
     Metallic 2.7 %), a diffuse-only material a Diffuse BSDF, anything else the Principled BSDF."""
     if a.coat is not None or a.sheen is not None or a.anisotropy > 0.0 or a.transmission > 0.0:
         return "principled", {}, "coated, sheen, anisotropic or transmissive: the Principled BSDF"
-    if a.kind == "conductor":
+    if a.kind == Kind.CONDUCTOR:
         dist = a.distribution if a.distribution in ("beckmann", "ggx") else "ggx"
         return "metallic", {"distribution": dist}, f"a metal: the Metallic BSDF ({dist}), a conductor's Fresnel"
     if a.alpha is None or max(a.specular) == 0.0:

@@ -37,7 +37,8 @@ class BlendReader:
     def accepts(self, path: Path) -> bool:
         try:
             with open(path, "rb") as f:
-                return f.read(7).startswith(BLEND_MAGIC)
+                head = f.read(max(len(m) for m in BLEND_MAGIC))
+            return any(head[:len(m)] == m for m in BLEND_MAGIC)
         except OSError:
             return True  # read() names the file and the reason
 

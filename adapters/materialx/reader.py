@@ -99,7 +99,7 @@ def _principled(shader, category: str) -> tuple[dict, list[str], list[str]]:
         # MaterialX keeps 32-bit floats: 0.944 comes back as 0.94400000572; 7 digits are what was written.
         rgb = tuple(_r(x) for x in got.asTuple())
         space = inp.getActiveColorSpace() if given else ""
-        if given and inp.getType().startswith("color") and space not in ("", *WORKING):
+        if given and inp.getType() in ("color3", "color4") and space not in ("", *WORKING):
             linear = tuple(_r(x) for x in colour_to_linear(rgb, space, where=f"{shader.getName()}: {name}"))
             notes.append(f"{name} ({', '.join(f'{x:.4g}' for x in rgb)}) is in {space}: read as "
                          f"({', '.join(f'{x:.4g}' for x in linear)}) in linear Rec.709, the renderers' working space")

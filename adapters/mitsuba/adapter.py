@@ -22,8 +22,8 @@ from brdfremap.core.data.atomic import write_text_atomic
 from brdfremap.core.data.errors import ConfigError, RenderError
 from brdfremap.core.protocol import Adapter, ModelChoice
 from brdfremap.core.data.scene import PointLight, ProbeScene
-from brdfremap.core.data.schemas import TRANSMISSION_DEPTH, Value
-from brdfremap.core.data.textures import Texture, TextureMap
+from brdfremap.core.data.schemas import ParamKind, TRANSMISSION_DEPTH, Value
+from brdfremap.core.data.textures import ColourSpace, Texture, TextureMap
 
 from . import appearance as _appearance
 from .appearance import EXT_IOR
@@ -188,7 +188,7 @@ def traverse_values(model: str, spec, p: dict[str, Value]) -> dict[str, Any]:
         return _blend_traverse(p)
     out: dict[str, Any] = {}
     for ps in spec.parameters:
-        if ps.kind == "choice" or not spec.is_active(ps.name, p):
+        if ps.kind == ParamKind.CHOICE or not spec.is_active(ps.name, p):
             continue
         v = p[ps.name]
         out[ps.name] = list(v) if isinstance(v, tuple) else float(v)  # type: ignore[arg-type]
@@ -238,7 +238,7 @@ MaterialX's surfaces are two-sided; the probe sees front faces only, so the fit 
 def bitmap_file(tex: Texture) -> dict[str, Any]:
     """A texture file as Mitsuba's `bitmap`: an sRGB-encoded one decoded (raw false), a data map read as
     it is (raw true)."""
-    return {"type": "bitmap", "filename": tex.file, "raw": tex.colorspace == "linear",
+    return {"type": "bitmap", "filename": tex.file, "raw": tex.colorspace == ColourSpace.LINEAR,
             "filter_type": "nearest" if tex.filter == "nearest" else "bilinear"}
 
 
@@ -386,7 +386,7 @@ class MitsubaAdapter(Adapter):
     def _scene(self, model: str, params: dict[str, Value], scene: ProbeScene):
         spec = self.models[model]
         shared = model == "blendbsdf" and _same_slots(params)
-        key = (model, tuple(params[p.name] for p in spec.parameters if p.kind == "choice"), spec.transmissive(params),
+        key = (model, tuple(params[p.name] for p in spec.parameters if p.kind == ParamKind.CHOICE), spec.transmissive(params),
                shared, scene.cache_key())
         if key in self._scenes:
             self._scenes.move_to_end(key)

@@ -20,6 +20,7 @@ from brdfremap.core.data.appearance import (
     reflectivity_edge_tint,
 )
 from brdfremap.core.data.schemas import Value
+from brdfremap.core.data.appearance import Kind
 
 EXT_IOR = 1.000277  # Mitsuba's default exterior medium (air)
 EtaK = tuple[tuple[float, ...], tuple[float, ...]]
@@ -112,7 +113,7 @@ def _hue(c) -> tuple[float, float, float]:
 
 def from_appearance(model: str, a: Appearance) -> dict[str, Value]:
     """This Mitsuba model's parameters for a neutral description, by the exporters' conventions."""
-    metal = a.kind == "conductor"
+    metal = a.kind == Kind.CONDUCTOR
     spec = a.specular if metal else (float(sum(a.specular)) / 3,) * 3
     out: dict[str, Value] = {}
     if a.distribution is not None and model in ("roughconductor", "roughplastic", "roughdielectric"):
@@ -182,14 +183,14 @@ def model_for(a: Appearance) -> tuple[str, dict[str, Value], str]:
     """The Mitsuba model an exporter would pick: a metal is a rough conductor, a diffuse-only
     material a diffuse BSDF, anything else a rough plastic; the source's distribution is held."""
     fix: dict[str, Value] = {"distribution": a.distribution} if a.distribution in ("beckmann", "ggx") else {}
-    if a.transmission >= 0.5 and a.kind == "dielectric" and max(a.diffuse) == 0.0:
+    if a.transmission >= 0.5 and a.kind == Kind.DIELECTRIC and max(a.diffuse) == 0.0:
         return "roughdielectric", fix, "a glass (transmissive, no diffuse base)"
-    if a.coat is not None or a.sheen is not None or (a.anisotropy > 0.0 and a.kind != "conductor") \
+    if a.coat is not None or a.sheen is not None or (a.anisotropy > 0.0 and a.kind != Kind.CONDUCTOR) \
             or a.transmission > 0.0:
         return "principled", {}, "coated, sheen or partly transmissive: Mitsuba's principled BSDF"
-    if a.kind == "conductor" and a.anisotropy > 0.0:
+    if a.kind == Kind.CONDUCTOR and a.anisotropy > 0.0:
         return "roughconductor", {**fix, "anisotropy": "anisotropic"}, "an anisotropic metal"
-    if a.kind == "conductor":
+    if a.kind == Kind.CONDUCTOR:
         return "roughconductor", fix, "a metal (coloured specular, no diffuse)"
     if a.alpha is None or max(a.specular) == 0.0:
         return "diffuse", {}, "diffuse only (no specular lobe)"

@@ -4,7 +4,7 @@ model (`bsdf_0`, `bsdf_1`: a choice) and each slot's parameters under the slot's
 
 from __future__ import annotations
 
-from brdfremap.core.data.appearance import Appearance
+from brdfremap.core.data.appearance import Appearance, Kind
 from brdfremap.core.data.schemas import ModelSpec, ParamSpec, Value
 
 SLOTS = ("bsdf_0", "bsdf_1")
@@ -54,8 +54,8 @@ def blend_spec(models: dict[str, ModelSpec]) -> ModelSpec:
 
 def component(slot: str, p: dict[str, Value]) -> tuple[str, dict[str, Value]]:
     """A slot's model and its own parameters (names without the slot)."""
-    cut = len(slot) + 1
-    return str(p[slot]), {k[cut:]: v for k, v in p.items() if k.startswith(slot + ".")}
+    own = ((k.partition("."), v) for k, v in p.items())
+    return str(p[slot]), {name: v for (head, dot, name), v in own if dot and head == slot}
 
 
 def blend_appearance(p: dict[str, Value], read) -> Appearance | None:
@@ -76,5 +76,5 @@ def blend_appearance(p: dict[str, Value], read) -> Appearance | None:
     diffuse = mix(a.diffuse, b.diffuse)
     return Appearance(kind="dielectric" if max(diffuse) > 0 else heavier.kind, alpha=glossy.alpha, distribution=glossy.distribution,
                       specular=mix(a.specular, b.specular), diffuse=diffuse,  # type: ignore
-                      ior=glossy.ior if heavier.kind == "dielectric" else None, anisotropy=glossy.anisotropy,
+                      ior=glossy.ior if heavier.kind == Kind.DIELECTRIC else None, anisotropy=glossy.anisotropy,
                       rotation=glossy.rotation)

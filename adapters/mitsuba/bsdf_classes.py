@@ -7,6 +7,7 @@ three classes. Their formulas and the sampling they follow are described in `bsd
 from __future__ import annotations
 
 import math
+from enum import StrEnum
 
 import drjit as dr
 import mitsuba as mi
@@ -34,6 +35,14 @@ if mi.variant() is None:
 
 Flags = mi.BSDFFlags
 
+
+
+class Form(StrEnum):
+    """What Mitsuba 0.5's microfacet model is over: a conductor's Fresnel, or a plastic's (a
+    dielectric over a Lambertian)."""
+
+    CONDUCTOR = "conductor"
+    PLASTIC = "plastic"
 
 def opaque_float(x: float):
     v = mi.Float(float(x))
@@ -312,14 +321,14 @@ class AshikhminShirley(_Rough):
     default_ks = 1.0
 
     def __init__(self, props):
-        form = _get(props, "form", "conductor")
-        if form not in ("conductor", "plastic"):
-            raise ValueError(f"ashikhmin_shirley: form must be conductor or plastic, got {form!r}")
-        self.form = form
-        self.has_diffuse_param = form == "plastic"
+        given = _get(props, "form", Form.CONDUCTOR)
+        if given not in tuple(Form):
+            raise ValueError(f"ashikhmin_shirley: form must be conductor or plastic, got {given!r}")
+        self.form = form = Form(given)
+        self.has_diffuse_param = form == Form.PLASTIC
         super().__init__(props)
         self._read_alpha(props)
-        if form == "conductor":
+        if form == Form.CONDUCTOR:
             if _has(props, "material"):
                 eta, k = conductor_preset(props.get("material"))
             elif _has(props, "reflectivity"):
@@ -342,7 +351,7 @@ class AshikhminShirley(_Rough):
         # roughconductor does not check at all.
         ks, kd = host(self.ks), host(self.kd)
         self._trim()
-        if self.form == "plastic":
+        if self.form == Form.PLASTIC:
             s = trim_scale(ks, (0.0, 0.0, 0.0)) if self.conserve else 1.0
             sd = trim_scale(kd, (0.0, 0.0, 0.0)) if self.conserve else 1.0
             self.scale = min(s, sd)
@@ -362,7 +371,7 @@ class AshikhminShirley(_Rough):
         self.norm = opaque_float(math.sqrt((eu + 2) * (ev + 2)) * INV_TWOPI)
         self.anisotropic = eu != ev
         self.phi_ratio = opaque_float(math.sqrt((eu + 2) / (ev + 2)))
-        if self.form == "plastic":
+        if self.form == Form.PLASTIC:
             self.eta_h = host1(self.int_ior) / self.ext_ior
             self.eta_d = opaque_float(self.eta_h)
             table, fdr = rough_transmittance_table(round(0.5 * (au + av), 6), round(self.eta_h, 6))
@@ -374,7 +383,7 @@ class AshikhminShirley(_Rough):
 
     def traverse(self, callback):
         super().traverse(callback)
-        if self.form == "conductor":
+        if self.form == Form.CONDUCTOR:
             callback.put("eta", self.eta, mi.ParamFlags.Differentiable)
             callback.put("k", self.k, mi.ParamFlags.Differentiable)
         else:
@@ -443,7 +452,7 @@ class AshikhminShirley(_Rough):
         ci = mi.Frame3f.cos_theta(wi)
         model = self._D(h) * self._G1(wi, h) * self._G1(wo, h) / (4.0 * ci)
         d = dr.dot(wi, h)
-        if self.form == "conductor":
+        if self.form == Form.CONDUCTOR:
             return self.ks_eff * self._fresnel_conductor(d) * model
         return self.ks_eff * (self._fresnel_dielectric(d) * model)
 
@@ -452,13 +461,13 @@ class AshikhminShirley(_Rough):
         ci, co = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
         active = self._above(wi, wo, active)
         value = self._spec_value(wi, wo)
-        if self.form == "plastic":
+        if self.form == Form.PLASTIC:
             t12, t21 = self._transmittance(ci), self._transmittance(co)
             value = value + self.kd_eff * (self.diff_scale * co * t12 * t21)
         return dr.select(active, value, 0.0)
 
     def _spec_prob(self, wi):
-        if self.form == "conductor":
+        if self.form == Form.CONDUCTOR:
             return mi.Float(1.0)
         # Mitsuba 0.5 roughplastic: share samples by the interface's reflectance at wi.
         w = self.spec_weight
@@ -476,7 +485,7 @@ class AshikhminShirley(_Rough):
         active = self._above(wi, wo, active)
         ps = self._spec_prob(wi)
         p = ps * self._spec_pdf(wi, wo)
-        if self.form == "plastic":
+        if self.form == Form.PLASTIC:
             p = p + (1.0 - ps) * cos_hemisphere_pdf(wo)
         return dr.select(active, p, 0.0)
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from brdfremap.core.data.errors import ConfigError
 from brdfremap.core.library.formats import Entry, clip_into
-from brdfremap.core.data.schemas import Material, Value
+from brdfremap.core.data.schemas import Material, ParamKind, Value
 from brdfremap.core.data.textures import LUMA, Texture, read_values, texture
 
 from .blend import COMPONENTS, SLOTS
@@ -311,7 +311,7 @@ def _textured_input(doc: _Document, prop: ET.Element, name: str, spec, notes: li
         c0, c1 = (_rgb(colours.get(k, d)) for k, d in (("color0", 0.4), ("color1", 0.2)))
         mean = tuple((a + b) / 2 for a, b in zip(c0, c1))
         notes.append(f"{name}: a checkerboard texture is read as its mean, {_shown(mean)}")
-        return (mean if kind == "rgb" else float(np.dot(mean, LUMA))), None
+        return (mean if kind == ParamKind.RGB else float(np.dot(mean, LUMA))), None
     image = _bitmap(doc, tex, name, notes)
     if image is None:
         return None, None
@@ -320,7 +320,7 @@ def _textured_input(doc: _Document, prop: ET.Element, name: str, spec, notes: li
     except ConfigError as exc:
         notes.append(f"{name}: its image cannot be read ({exc}): read as the model's default")
         return None, None
-    mean = tuple(float(x) for x in values.reshape(-1, 3).mean(axis=0)) if kind == "rgb" else float(values.mean())
+    mean = tuple(float(x) for x in values.reshape(-1, 3).mean(axis=0)) if kind == ParamKind.RGB else float(values.mean())
     plain = not any(t.get("name") == "to_uv" for t in tex if t.tag == "transform") and \
         {s.get("name"): s.get("value", "") for s in tex.iter("string")}.get("wrap_mode", "repeat") == "repeat"
     if maps and plain and name in spec.texturable:

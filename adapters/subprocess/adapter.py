@@ -69,9 +69,10 @@ class SubprocessAdapter(Adapter):
     def unavailable_reason(cls) -> str | None:
         d = cls.definition
         for req in d.requires:
-            if req.startswith("py:"):
-                if importlib.util.find_spec(req[3:]) is None:
-                    return f"Python module {req[3:]!r} is not installed"
+            kind, colon, module = req.partition(":")
+            if colon and kind == "py":
+                if importlib.util.find_spec(module) is None:
+                    return f"Python module {module!r} is not installed"
             elif which(req) is None:
                 return f"executable {req!r} not found on PATH"
         exe = d.command[0]
@@ -291,7 +292,7 @@ def _what_it_wrote(output: Path) -> str:
     """The files the renderer did write beside the expected image, if any (image.exr.png)."""
     try:
         found = sorted(f.name for f in output.parent.iterdir()
-                       if f.name not in _REQUEST_FILES and not f.name.startswith("scene."))
+                       if f.name not in _REQUEST_FILES and Path(f.name).stem != "scene")
     except OSError:
         return ""
     return f" (it wrote: {', '.join(found[:8])})" if found else " (it wrote no file there)"

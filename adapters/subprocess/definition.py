@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 from brdfremap.core.data.configio import load_yaml_model
-from brdfremap.core.data.schemas import LobeSpec, ModelSpec, ParamSpec
+from brdfremap.core.data.schemas import Lobe, LobeSpec, ModelSpec, ParamKind, ParamSpec
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 FORMAT = 2
@@ -43,7 +43,7 @@ class ModelDef(BaseModel):
 
     description: str = ""
     parameters: list[ParamSpec] = Field(description="The model's parameters.")
-    lobes: dict[Literal["diffuse", "specular"], Any] = Field(
+    lobes: dict[Lobe, Any] = Field(
         default_factory=dict,
         description="Per lobe, the parameter values that isolate it ({specular: 0}); or the long form "
                     "{overrides: {...}, params: [...]}; or 'empty'.")
@@ -164,7 +164,7 @@ class RendererDef(BaseModel):
     def model_specs(self) -> dict[str, ModelSpec]:
         specs = {}
         for name, m in self.models.items():
-            numeric = [p.name for p in m.parameters if p.kind != "choice"]
+            numeric = [p.name for p in m.parameters if p.kind != ParamKind.CHOICE]
             lobes: dict[str, LobeSpec] = {}
             raw = {k: v for k, v in m.lobes.items()}
             short = _short(m)
@@ -176,9 +176,9 @@ class RendererDef(BaseModel):
                     lobes[lobe] = LobeSpec(empty=True)
                 elif lobe in short:
                     # Short form: the params of a lobe are those the *other* lobe switches off.
-                    other = "specular" if lobe == "diffuse" else "diffuse"
+                    other = Lobe.SPECULAR if lobe == Lobe.DIFFUSE else Lobe.DIFFUSE
                     mine = list(short.get(other, {}))
-                    if lobe == "specular":
+                    if lobe == Lobe.SPECULAR:
                         mine += [p for p in numeric if p not in mine and p not in short.get("specular", {})]
                     lobes[lobe] = LobeSpec(overrides=v, params=tuple(dict.fromkeys(mine)))
                 else:
@@ -201,7 +201,7 @@ def _ambiguous(model: str, m: ModelDef) -> str | None:
     short = _short(m)
     if set(short) != {"diffuse", "specular"}:
         return None
-    numeric = [p.name for p in m.parameters if p.kind != "choice" and (p.fit or p.fit_when or p.fit_when_carried
+    numeric = [p.name for p in m.parameters if p.kind != ParamKind.CHOICE and (p.fit or p.fit_when or p.fit_when_carried
                                                                        or p.fit_for)]
     left = [p for p in numeric if p not in short["diffuse"] and p not in short["specular"]]
     if not left:

@@ -19,24 +19,22 @@ COMMANDS = ("convert", "table", "render", "sweep", "roundtrip", "schema", "adapt
 def _dispatch(argv: list[str]) -> int:
     from . import check_cmd, convert_cmd, experiment_cmd, remap_cmd, table_cmd, tools
 
+    handlers = {
+        "adapters": lambda rest: tools.adapters(tools.adapters_parser().parse_args(rest)),
+        "schema": lambda rest: tools.schema(tools.schema_parser().parse_args(rest)),
+        "check": lambda rest: check_cmd.run(check_cmd.parser().parse_args(rest)),
+        "render": lambda rest: tools.render(tools.render_parser().parse_args(rest)),
+        "table": table_cmd.run,
+        "convert": lambda rest: convert_cmd.run(convert_cmd.parser().parse_args(rest)),
+        **{kind: (lambda rest, kind=kind: experiment_cmd.run(kind, experiment_cmd.parser(kind).parse_args(rest)))
+           for kind in ("sweep", "roundtrip")},
+    }
     head, rest = (argv[0], argv[1:]) if argv else ("", [])
-    if head and not head.startswith("-") and head not in COMMANDS:
+    if head in handlers:
+        return handlers[head](rest)
+    if head.isalpha():  # a word where a command goes (a flag or a path is the one-material form's)
         raise ConfigError(f"unknown command {head!r} (commands: {', '.join(COMMANDS)}; or `remap --adapter A --model M "
                           "--source MATERIAL.yaml --out DIR` for one material; see `remap --help`)")
-    if head == "adapters":
-        return tools.adapters(tools.adapters_parser().parse_args(rest))
-    if head == "schema":
-        return tools.schema(tools.schema_parser().parse_args(rest))
-    if head == "check":
-        return check_cmd.run(check_cmd.parser().parse_args(rest))
-    if head == "render":
-        return tools.render(tools.render_parser().parse_args(rest))
-    if head == "table":
-        return table_cmd.run(rest)
-    if head == "convert":
-        return convert_cmd.run(convert_cmd.parser().parse_args(rest))
-    if head in ("sweep", "roundtrip"):
-        return experiment_cmd.run(head, experiment_cmd.parser(head).parse_args(rest))
     return remap_cmd.run(remap_cmd.parser().parse_args(argv))
 
 

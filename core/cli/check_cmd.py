@@ -6,6 +6,7 @@ import argparse
 
 from ..data.errors import ConfigError
 from . import options
+from ..data.scene import LightType
 
 
 def parser() -> argparse.ArgumentParser:
@@ -42,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
     adapter = registry.create(name)
     try:
         rows = run_checks(lambda model, params, scene, lobe=None: adapter.render(model, params, scene, lobe), models,
-                          white, glass, "environment" in entry.light_types)
+                          white, glass, LightType.ENVIRONMENT in entry.light_types)
     finally:
         adapter.close()
     width = max(len(r.name) for r in rows)

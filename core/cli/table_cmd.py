@@ -9,6 +9,7 @@ import time
 
 from ..data.errors import ConfigError
 from . import options
+from ..data.schemas import ParamKind
 
 ACTIONS = ("build", "show")
 
@@ -62,14 +63,18 @@ def show(args: argparse.Namespace) -> int:
 
 
 def _summary(t) -> None:
+    from ..tables.outputs import ERROR, OutputKind
+    from ..tables.spec import AxisMode
+    from ..tables.table import Channels
+
     s, b = t.spec, t.build
-    axes = " x ".join(f"{n} {a.count}" + (" per channel" if a.mode == "channels" and t.source_kinds[n] == "rgb"
+    axes = " x ".join(f"{n} {a.count}" + (" per channel" if a.mode == AxisMode.CHANNELS and t.source_kinds[n] == ParamKind.RGB
                                             else "")
                       + (f" ({', '.join(f'{v:g}' for v in a.values)})" if a.values is not None else "")
                       for n, a in s.axes.items())
     print(f"table          {t.name}: {s.source.adapter}:{s.source.model} -> {s.target.adapter}:{s.target.model}")
     print(f"grid           {axes} = {b.points} points; mapped: "
-          f"{', '.join(dict.fromkeys(o.param for o in t.outputs if o.kind != 'error'))}")
+          f"{', '.join(dict.fromkeys(o.param for o in t.outputs if o.kind != OutputKind.ERROR))}")
     continued = sum(pt.continued for pt in t.points)
     remedied = sum(bool(pt.remedy) for pt in t.points)
     why = (f"{b.left_out - b.cliffs} whose fit is in question, {b.cliffs} cliffs" if b.cliffs is not None else
@@ -89,7 +94,7 @@ def _summary(t) -> None:
           f"in {b.ran_in}")
     print("maps           held-out lookup error / direct fit error; cross-validated error on the grid (a fraction "
           "of each parameter's range)")
-    if any(c.channels == "mean" for c in t.candidates.values()):
+    if any(c.channels == Channels.MEAN for c in t.candidates.values()):
         print("               (-mean: a parameter the colour's channels share read at its mean grey level; the others "
               "read it at each channel's and weigh them by the channel's value squared)")
     for m, c in t.candidates.items():
@@ -98,7 +103,7 @@ def _summary(t) -> None:
             continue
         held = (f"median {c.median_ratio:.3f}, 95th percentile {c.p95_ratio:.3f}" if c.median_ratio is not None
                 else "no held-out lookups")
-        cv = ", ".join(f"{k} " + ("–" if v is None else f"{v:.3f}") for k, v in c.cv_rms.items() if k != "error")
+        cv = ", ".join(f"{k} " + ("–" if v is None else f"{v:.3f}") for k, v in c.cv_rms.items() if k != ERROR)
         if c.correction_cv:
             cv += "; coloured points' mean miss " + ", ".join(f"{k} {before:.3f}->{after:.3f}" for k, (before, after)
                                                            in c.correction_cv.items())

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from ..data.errors import ConfigError
-from ..data.schemas import format_value
+from ..data.schemas import format_value, ParamKind, Scale
 from . import options
 
 
@@ -30,9 +30,9 @@ def adapters_parser() -> argparse.ArgumentParser:
 def _parameter(p, spec=None) -> str:
     """One parameter as `remap adapters` shows it: name, kind, bounds or choices, default, and
     whether its renderer takes it as an image (a texture)."""
-    if p.kind == "choice":
+    if p.kind == ParamKind.CHOICE:
         return f"{p.name} ({' | '.join(map(str, p.choices))}; default {p.default})"
-    scale = ", log" if p.scale == "log" else ""
+    scale = ", log" if p.scale == Scale.LOG else ""
     held = (", held unless the source has it" if p.fit_when_carried else ", held") if not p.fit else ""
     if p.fit_for:
         held += f"; tried where the source needs {' or '.join(n.value for n in p.fit_for)} and the fit leaves more " \

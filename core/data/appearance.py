@@ -7,6 +7,7 @@ session uses the pair as the fit's informed start; the fit corrects what the rea
 from __future__ import annotations
 
 import math
+from enum import StrEnum
 from typing import Any, Literal
 
 import numpy as np
@@ -34,6 +35,21 @@ class Sheen(_Strict):
     roughness: float = Field(0.5, ge=0.0, le=1.0, description="Spread of the sheen (Cycles' Sheen Roughness).")
 
 
+class Kind(StrEnum):
+    """A metal (coloured specular, no diffuse) or a dielectric (diffuse base, white specular)."""
+
+    CONDUCTOR = "conductor"
+    DIELECTRIC = "dielectric"
+
+
+class DiffuseModel(StrEnum):
+    """The diffuse lobe's shape."""
+
+    LAMBERT = "lambert"
+    BURLEY = "burley"
+    OREN_NAYAR = "oren-nayar"
+
+
 class Appearance(_Strict):
     """What today's exporters carry over: the kind of material, its specular lobe's α and
     normal-incidence reflectance, its diffuse albedo; a coat, a sheen, anisotropy and
@@ -42,7 +58,7 @@ class Appearance(_Strict):
     α/√(1 − 0.9 a), across α·√(1 − 0.9 a)) and its rotation a fraction of a turn of the tangent,
     counter-clockwise about the outward normal, from the probe's (the sphere's latitudes)."""
 
-    kind: Literal["conductor", "dielectric"] = Field(
+    kind: Kind = Field(
         description="A metal (coloured specular, no diffuse) or a dielectric (diffuse base, white specular).")
     alpha: float | None = Field(None, gt=0.0, description="Microfacet α of the specular lobe; None: no specular lobe.")
     distribution: Literal["beckmann", "ggx"] | None = Field(None, description="Microfacet distribution, if one.")
@@ -53,8 +69,8 @@ class Appearance(_Strict):
     k: RGB | None = Field(None, description="A conductor's complex IOR, imaginary part, when known.")
     anisotropy: float = Field(0.0, ge=0.0, le=1.0, description="Disney's anisotropy of the specular lobe.")
     rotation: float = Field(0.0, description="Rotation of the anisotropy's tangent, in turns.")
-    diffuse_model: Literal["lambert", "burley", "oren-nayar"] = Field(
-        "lambert", description="The diffuse lobe's shape: Lambert's, Burley's (brighter towards retro-reflection "
+    diffuse_model: DiffuseModel = Field(
+        DiffuseModel.LAMBERT, description="The diffuse lobe's shape: Lambert's, Burley's (brighter towards retro-reflection "
                                "as it roughens) or Oren-Nayar's (flatter).")
     coat: Coat | None = Field(None, description="A clear coat, if one.")
     sheen: Sheen | None = Field(None, description="A sheen, if one.")
@@ -74,7 +90,7 @@ class Appearance(_Strict):
     def edge_tint(self) -> RGB | None:
         """A conductor's F82 tint (Hoffman 2019, as Blender's Principled BSDF takes it): its reflectance
         at 82 degrees over Schlick's from its F0 there, clipped to [0, 1]; None without a complex IOR."""
-        if self.kind != "conductor" or self.eta is None or self.k is None:
+        if self.kind != Kind.CONDUCTOR or self.eta is None or self.k is None:
             return None
         ratio = conductor_fresnel(self.eta, self.k, EDGE_COS) / np.maximum(schlick(self.specular, EDGE_COS), 1e-9)
         return as_rgb(np.clip(ratio, 0.0, 1.0))
@@ -82,13 +98,13 @@ class Appearance(_Strict):
     def needs(self) -> dict[Need, str]:
         """What this material has that a target's default inputs may not render, each with why."""
         out: dict[Need, str] = {}
-        if self.kind == "conductor" and self.eta is not None and self.k is not None:
+        if self.kind == Kind.CONDUCTOR and self.eta is not None and self.k is not None:
             true = conductor_fresnel(self.eta, self.k, EDGE_COS)
             off = float(np.max(np.abs(true - schlick(self.specular, EDGE_COS))))
             if off > EDGE_MIN:
                 out[Need.EDGE_TINT] = f"its complex IOR reflects {off:.3f} away from Schlick's at 82 degrees"
-        if self.kind == "dielectric" and max(self.diffuse) > 0.0 and self.diffuse_model != "lambert":
-            need = Need.RETRO_DIFFUSE if self.diffuse_model == "burley" else Need.ROUGH_DIFFUSE
+        if self.kind == Kind.DIELECTRIC and max(self.diffuse) > 0.0 and self.diffuse_model != DiffuseModel.LAMBERT:
+            need = Need.RETRO_DIFFUSE if self.diffuse_model == DiffuseModel.BURLEY else Need.ROUGH_DIFFUSE
             out[need] = f"its diffuse lobe is {_DIFFUSE_NAMES[self.diffuse_model]}, not Lambert's"
         return out
 

@@ -6,13 +6,20 @@ findings alone (`Verdict.of`), never from their text."""
 
 from __future__ import annotations
 
-from typing import Annotated, Literal, Union
+from enum import StrEnum
+from typing import Annotated, ClassVar, Literal, Union
 
 from pydantic import Field, computed_field
 
 from .model import Strict, WithDerived
+from .scene import Lighting
 
-Severity = Literal["unreliable", "unchecked", "note"]
+class Severity(StrEnum):
+    UNRELIABLE = "unreliable"
+    UNCHECKED = "unchecked"
+    NOTE = "note"
+
+
 """unreliable: the result is not to be trusted; unchecked: a condition it is judged under could not be
 resolved, so it was not checked there (with nothing unreliable, the verdict is "unchecked", never ok);
 note: what was done or seen, which changes no verdict."""
@@ -24,7 +31,7 @@ class _Finding(WithDerived):
     @computed_field  # type: ignore[prop-decorator]
     @property
     def severity(self) -> Severity:
-        return "unreliable"
+        return Severity.UNRELIABLE
 
     @computed_field  # type: ignore[prop-decorator]
     @property
@@ -39,7 +46,7 @@ class _Note(_Finding):
     @computed_field  # type: ignore[prop-decorator]
     @property
     def severity(self) -> Severity:
-        return "note"
+        return Severity.NOTE
 
 
 def _beyond(error: float, beyond: float | None) -> str:
@@ -75,16 +82,24 @@ class HeldOutError(Strict):
             "" if self.beyond_noise >= 0.995 * self.error else f" ({self.beyond_noise:.1%} beyond the noise)")
 
 
-class HeldOutAbove(_Finding):
+class _Above(_Finding):
+    """Lighting conditions under which the result is off its source beyond the threshold: one finding,
+    said of the held-out lights (`HeldOutAbove`) and of a textured result (`TexturedAbove`)."""
+
+    opening: ClassVar[str]
+
+    def sentence(self) -> str:  # each declares conditions (with their words) and threshold, in its own order
+        return (f"{self.opening}: {', '.join(c.words() for c in self.conditions)}, "  # type: ignore[attr-defined]
+                f"over the {self.threshold:.0%} threshold")  # type: ignore[attr-defined]
+
+
+class HeldOutAbove(_Above):
     """Matches under the scene's lights but not under held-out ones: it does not look the same there."""
 
+    opening: ClassVar[str] = "does not look the same under held-out lights"
     kind: Literal["held_out_above"] = "held_out_above"
     conditions: list[HeldOutError]
     threshold: float
-
-    def sentence(self) -> str:
-        return (f"does not look the same under held-out lights: {', '.join(c.words() for c in self.conditions)}, "
-                f"over the {self.threshold:.0%} threshold")
 
 
 class RenderersFloor(_Note):
@@ -123,7 +138,7 @@ class RenderersDisagree(_Finding):
     @computed_field  # type: ignore[prop-decorator]
     @property
     def severity(self) -> Severity:
-        return "note" if self.result_error is None else "unreliable"
+        return Severity.NOTE if self.result_error is None else Severity.UNRELIABLE
 
     def sentence(self) -> str:
         what = f"the renderers disagree on light through a sphere under the {self.label}: their {self.reference}es " \
@@ -161,7 +176,7 @@ class CannotResolve(_Finding):
     @computed_field  # type: ignore[prop-decorator]
     @property
     def severity(self) -> Severity:
-        return "unchecked" if self.elsewhere else "unreliable"
+        return Severity.UNCHECKED if self.elsewhere else Severity.UNRELIABLE
 
     def sentence(self) -> str:
         where = self.label
@@ -303,22 +318,19 @@ class TexturedCondition(Strict):
     beyond_noise: float
 
     def words(self) -> str:
-        where = {"scene": "the scene's lights", "environment": "the studio environment"}.get(self.condition,
+        where = {Lighting.SCENE: "the scene's lights", Lighting.ENVIRONMENT: "the studio environment"}.get(self.condition,
                                                                                               self.condition)
         return f"{self.error:.1%} under {where}" + ("" if self.beyond_noise >= 0.995 * self.error else
                                                     f" ({self.beyond_noise:.1%} beyond the noise)")
 
 
-class TexturedAbove(_Finding):
+class TexturedAbove(_Above):
     """The textured result, rendered over its maps, does not look like the textured source."""
 
+    opening: ClassVar[str] = "the textured result is off the textured source"
     kind: Literal["textured_above"] = "textured_above"
     conditions: list[TexturedCondition]
     threshold: float
-
-    def sentence(self) -> str:
-        return (f"the textured result is off the textured source: {', '.join(c.words() for c in self.conditions)}, "
-                f"over the {self.threshold:.0%} threshold")
 
 
 class TexturedNotes(_Note):
@@ -447,18 +459,25 @@ class InputsTried(_Note):
         return f"tried {why}: {self.before:.2%} -> {self.after:.2%}, not a tenth better, so held"
 
 
-Finding = Annotated[
-    Union[ErrorAboveThreshold, ModelMismatch, TableMismatch, HeldOutAbove, RenderersDisagree, RenderersFloor,
-          TransportUnchecked,
-          CannotResolve, ImagePrecision, NoEffect, IllConditioned,
-          NotAtMinimum,
-          PinnedOnBound, RendererAlters, ValidationSkipped, NothingFitted, TableLookup, TexturedAbove, TexturedNotes,
-          StartKept, ChoiceTried, SmoothHeld, SchemeChosen, DeadParameters,
-          JointRefined, PredictionNotRealised, NoisePolished, InputsTried],
-    Field(discriminator="kind"),
-]
+FINDINGS = (ErrorAboveThreshold, ModelMismatch, TableMismatch, HeldOutAbove, RenderersDisagree, RenderersFloor,
+            TransportUnchecked, CannotResolve, ImagePrecision, NoEffect, IllConditioned, NotAtMinimum,
+            PinnedOnBound, RendererAlters, ValidationSkipped, NothingFitted, TableLookup, TexturedAbove, TexturedNotes,
+            StartKept, ChoiceTried, SmoothHeld, SchemeChosen, DeadParameters,
+            JointRefined, PredictionNotRealised, NoisePolished, InputsTried)
+Finding = Annotated[Union[FINDINGS], Field(discriminator="kind")]
 
-Status = Literal["ok", "mismatch", "unreliable", "unchecked"]
+FindingKind = StrEnum("FindingKind", {c.model_fields["kind"].default.upper(): c.model_fields["kind"].default
+                                      for c in FINDINGS})
+"""Every finding's kind, as an enum (built from the findings themselves, so none is written twice):
+what a table's point keeps of its findings."""
+
+class Status(StrEnum):
+    """A result's verdict (`Verdict.of`)."""
+
+    OK = "ok"
+    MISMATCH = "mismatch"
+    UNRELIABLE = "unreliable"
+    UNCHECKED = "unchecked"
 
 
 class Verdict(Strict):
@@ -472,33 +491,33 @@ class Verdict(Strict):
 
     @classmethod
     def of(cls, findings: list) -> "Verdict":
-        problems = [f for f in findings if f.severity == "unreliable"]
+        problems = [f for f in findings if f.severity == Severity.UNRELIABLE]
         if not problems:
-            status: Status = "unchecked" if any(f.severity == "unchecked" for f in findings) else "ok"
+            status = Status.UNCHECKED if any(f.severity == Severity.UNCHECKED for f in findings) else Status.OK
         elif any(isinstance(f, (ModelMismatch, TableMismatch)) for f in problems) and all(
                 isinstance(f, (ModelMismatch, TableMismatch, HeldOutAbove)) for f in problems):
-            status = "mismatch"  # the closest this model gets, under the held-out lights too
+            status = Status.MISMATCH  # the closest this model gets, under the held-out lights too
         else:
-            status = "unreliable"
+            status = Status.UNRELIABLE
         return cls(status=status, findings=list(findings))
 
     @property
     def reliable(self) -> bool:
-        return self.status == "ok"
+        return self.status == Status.OK
 
     @property
     def problems(self) -> list:
-        return [f for f in self.findings if f.severity == "unreliable"]
+        return [f for f in self.findings if f.severity == Severity.UNRELIABLE]
 
     @property
     def unchecked(self) -> list:
-        return [f for f in self.findings if f.severity == "unchecked"]
+        return [f for f in self.findings if f.severity == Severity.UNCHECKED]
 
     @property
     def notes(self) -> list[str]:
         """The notes, and what was not checked where something else makes the result unreliable."""
         return [f.message for f in self.findings
-                if f.severity == "note" or (f.severity == "unchecked" and self.problems)]
+                if f.severity == Severity.NOTE or (f.severity == Severity.UNCHECKED and self.problems)]
 
     @property
     def reason(self) -> str:

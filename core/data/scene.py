@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from enum import StrEnum
 from typing import Annotated, Any, Literal, Union
 
 from pydantic import ConfigDict, Field, ValidationInfo, field_validator, model_validator
@@ -49,6 +50,25 @@ class Camera(_Strict):
     def position(self) -> tuple[float, float, float]:
         tx, ty, tz = self.target
         return (tx, ty, tz + self.distance)
+
+
+class LightType(StrEnum):
+    """The kinds of light a scene holds (an adapter declares those it renders: `light_types`)."""
+
+    POINT = "point"
+    ENVIRONMENT = "environment"
+
+
+class Lighting(StrEnum):
+    """The lighting a result is judged under: the fit's scene, each held-out condition, and the job's
+    own scene where the fit ran elsewhere."""
+
+    SCENE = "scene"
+    GRAZING = "grazing"
+    RIM = "rim"
+    HEADLIGHT = "headlight"
+    ENVIRONMENT = "environment"
+    GIVEN = "given"
 
 
 class PointLight(_Strict):

@@ -11,6 +11,7 @@ from pydantic import Field, ValidationError, model_validator
 
 from .errors import ConfigError
 from .model import Strict as _Strict
+from .kinds import Lobe, ParamKind, Scale
 from .textures import Texture
 
 Value = float | tuple[float, float, float] | str
@@ -42,12 +43,12 @@ class ParamSpec(_Strict):
     """One parameter of a material model."""
 
     name: str = Field(description="Parameter name as the user writes it.")
-    kind: Literal["scalar", "rgb", "choice"] = Field(description="A number, three numbers, or one of `choices`.")
+    kind: ParamKind = Field(description="A number, three numbers, or one of `choices`.")
     lower: float = Field(0.0, description="Lower bound (scalar and rgb).")
     upper: float = Field(1.0, description="Upper bound (scalar and rgb).")
     default: Value = Field(description="Value used when neither the source nor --fix gives one.")
     choices: tuple[str, ...] = Field((), description="Allowed values of a choice parameter.")
-    scale: Literal["linear", "log"] = Field("linear", description="How the optimiser normalises it to [0, 1].")
+    scale: Scale = Field(Scale.LINEAR, description="How the optimiser normalises it to [0, 1].")
     typical: tuple[float, float] | None = Field(
         None, description="Scalar only: where a fit's spread starts lie when the bounds reach further (a roughness "
                           "down to a mirror's: a start there renders a sub-pixel highlight, nearly black, and wins "
@@ -89,7 +90,7 @@ class ParamSpec(_Strict):
 
     @model_validator(mode="after")
     def _check(self) -> "ParamSpec":
-        if self.kind == "choice":
+        if self.kind == ParamKind.CHOICE:
             if not self.choices or self.default not in self.choices:
                 raise ValueError(f"choice parameter {self.name!r} needs choices that include its default")
         else:
@@ -97,13 +98,13 @@ class ParamSpec(_Strict):
                 raise ValueError(f"parameter {self.name!r}: only a choice can be explored")
             if not self.lower < self.upper:
                 raise ValueError(f"parameter {self.name!r}: lower must be below upper")
-            if self.scale == "log" and self.lower <= 0:
+            if self.scale == Scale.LOG and self.lower <= 0:
                 raise ValueError(f"parameter {self.name!r}: log scale needs a positive lower bound")
             vals = self.default if isinstance(self.default, (tuple, list)) else (self.default,)
             if isinstance(self.default, str) or not all(self.lower <= float(v) <= self.upper for v in vals):
                 raise ValueError(f"parameter {self.name!r}: default {self.default} is outside [{self.lower:g}, "
                                  f"{self.upper:g}]")
-        if self.typical is not None and not (self.kind == "scalar" and self.lower <= self.typical[0]
+        if self.typical is not None and not (self.kind == ParamKind.SCALAR and self.lower <= self.typical[0]
                                              < self.typical[1] <= self.upper):
             raise ValueError(f"parameter {self.name!r}: typical must be a scalar's range within its bounds")
         return self
@@ -115,22 +116,22 @@ class ParamSpec(_Strict):
     def clip(self, value: Any) -> Value:
         """A number (or RGB triple) moved into the bounds; a choice as given. TypeError or
         ValueError for a value of the wrong shape; NaN stays NaN."""
-        if self.kind == "choice":
+        if self.kind == ParamKind.CHOICE:
             return value
-        vals = [float(x) for x in value] if self.kind == "rgb" else [float(value)]
+        vals = [float(x) for x in value] if self.kind == ParamKind.RGB else [float(value)]
         if len(vals) != self.size:
             raise ValueError(f"{self.name}: expected {self.size} numbers, got {len(vals)}")
         vals = [min(max(x, self.lower), self.upper) for x in vals]
-        return tuple(vals) if self.kind == "rgb" else vals[0]  # type: ignore[return-value]
+        return tuple(vals) if self.kind == ParamKind.RGB else vals[0]  # type: ignore[return-value]
 
     def coerce(self, value: Any, where: str, file: str | None = None) -> Value:
         """Validate a user value and return it in canonical form (float, 3-tuple or str)."""
-        if self.kind == "choice":
+        if self.kind == ParamKind.CHOICE:
             if not isinstance(value, str) or value not in self.choices:
                 shown = ", ".join(self.choices[:12]) + (" …" if len(self.choices) > 12 else "")
                 raise ConfigError(f"{short(value)} is not one of: {shown}", file=file, field=where)
             return value
-        if self.kind == "scalar":
+        if self.kind == ParamKind.SCALAR:
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 raise ConfigError(f"expected a number, got {short(value)}", file=file, field=where)
             values = (float(value),)
@@ -149,7 +150,7 @@ class ParamSpec(_Strict):
                 raise ConfigError(
                     f"{v:g} is outside the bounds [{self.lower:g}, {self.upper:g}]", file=file, field=where
                 )
-        return values[0] if self.kind == "scalar" else values  # type: ignore[return-value]
+        return values[0] if self.kind == ParamKind.SCALAR else values  # type: ignore[return-value]
 
 
 class LobeSpec(_Strict):
@@ -170,7 +171,7 @@ class ModelSpec(_Strict):
     name: str
     description: str = ""
     parameters: tuple[ParamSpec, ...]
-    lobes: dict[Literal["diffuse", "specular"], LobeSpec] = Field(
+    lobes: dict[Lobe, LobeSpec] = Field(
         default_factory=dict, description="Empty when the adapter cannot isolate lobes (two-stage then falls back)."
     )
     smooth: bool = Field(False, description="Its reflection is perfectly smooth (a mirror, a smooth glass): a point "
@@ -202,16 +203,16 @@ class ModelSpec(_Strict):
                 if n not in names:
                     raise ValueError(f"model {self.name!r}: lobe refers to unknown parameter {n!r}")
         for n in self.texturable:
-            if n not in names or self.param(n).kind == "choice":
+            if n not in names or self.param(n).kind == ParamKind.CHOICE:
                 raise ValueError(f"model {self.name!r}: texturable {n!r} is not a numeric parameter")
         for n in self.smooth_when:
-            if n not in names or self.param(n).kind != "scalar":
+            if n not in names or self.param(n).kind != ParamKind.SCALAR:
                 raise ValueError(f"model {self.name!r}: smooth_when {n!r} is not a scalar parameter")
         if self.transmits_with is not None and (self.transmits_with not in names
-                                                or self.param(self.transmits_with).kind != "scalar"):
+                                                or self.param(self.transmits_with).kind != ParamKind.SCALAR):
             raise ValueError(f"model {self.name!r}: transmits_with {self.transmits_with!r} is not a scalar parameter")
         for n in self.complex_ior or ():
-            if n not in names or self.param(n).kind != "rgb":
+            if n not in names or self.param(n).kind != ParamKind.RGB:
                 raise ValueError(f"model {self.name!r}: complex_ior {n!r} is not an RGB parameter")
         for p in self.parameters:
             for n in p.inert_when:
@@ -304,7 +305,7 @@ class ModelSpec(_Strict):
         return [
             p.name
             for p in self.parameters
-            if p.kind != "choice" and (p.fit or _holds(p.fit_when, params)) and p.name not in fixed
+            if p.kind != ParamKind.CHOICE and (p.fit or _holds(p.fit_when, params)) and p.name not in fixed
             and self.is_active(p.name, params) and not _holds(p.held_when, params)
         ]
 
@@ -380,7 +381,7 @@ def parse_fix(text: str, spec: ModelSpec, flag: str = "--fix") -> tuple[str, Val
         )
     p = spec.param(name)
     value: Any = raw
-    if p.kind != "choice":
+    if p.kind != ParamKind.CHOICE:
         try:
             parts = [float(x) for x in raw.replace(" ", "").strip("[]").split(",")]
         except ValueError:

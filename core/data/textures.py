@@ -19,12 +19,13 @@ from __future__ import annotations
 import hashlib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
+from enum import StrEnum
 
 import numpy as np
 from pydantic import Field
 
 from .errors import ConfigError
+from .kinds import ParamKind
 from .model import Strict
 
 SRGB, LINEAR = "srgb_tx", "lin_rec709"
@@ -33,14 +34,26 @@ LUMA = np.array([0.2126, 0.7152, 0.0722])
 MAX_TEXELS = 8192 * 8192
 
 
+class ColourSpace(StrEnum):
+    """How a texture's values are encoded: sRGB (a colour map), or linear (a data map, an EXR)."""
+
+    SRGB = "srgb"
+    LINEAR = "linear"
+
+
+class Filter(StrEnum):
+    LINEAR = "linear"
+    NEAREST = "nearest"
+
+
 class Texture(Strict):
     """An image that drives one parameter, texel by texel."""
 
     file: str = Field(description="The image file (absolute).")
-    colorspace: Literal["srgb", "linear"] = Field(description="srgb: its values are sRGB-encoded (a colour map "
+    colorspace: ColourSpace = Field(description="srgb: its values are sRGB-encoded (a colour map "
                                                               "read as a renderer decodes it); linear: read as "
                                                               "they are (a data map, an EXR).")
-    filter: Literal["linear", "nearest"] = Field("linear", description="How a renderer interpolates it.")
+    filter: Filter = Field(Filter.LINEAR, description="How a renderer interpolates it.")
     channel: int | None = Field(None, ge=0, le=3, description="A scalar parameter read from this one channel of "
                                                             "the image (a packed map); None: its luminance.")
     sha256: str = Field("", description="The file's content (a changed image is another job).")
@@ -106,13 +119,13 @@ def read_values(tex: Texture, kind: str, where: str = "") -> np.ndarray:
         px = np.repeat(px[..., tex.channel:tex.channel + 1], 3, axis=-1)
     else:
         px = px[..., :3] if px.shape[-1] >= 3 else np.repeat(px[..., :1], 3, axis=-1)
-    if tex.colorspace == "srgb":
+    if tex.colorspace == ColourSpace.SRGB:
         px = _convert(px, SRGB, LINEAR)
     if not np.isfinite(px).all():
         bad = int((~np.isfinite(px)).any(axis=-1).sum())
         raise ConfigError(f"has {bad} texels that are not finite numbers (NaN or infinity){at}: fix the image",
                           file=tex.file)
-    return np.ascontiguousarray(px @ LUMA.astype(np.float32) if kind == "scalar" else px)
+    return np.ascontiguousarray(px @ LUMA.astype(np.float32) if kind == ParamKind.SCALAR else px)
 
 
 def colour_to_linear(rgb: tuple[float, float, float], space: str, where: str = "") -> tuple[float, float, float]:
@@ -169,7 +182,7 @@ def encode(values: np.ndarray, suffix: str, colorspace: str) -> bytes:
 
     arr = values[..., None] if values.ndim == 2 else values
     arr = np.ascontiguousarray(arr, np.float32)
-    if colorspace == "srgb":
+    if colorspace == ColourSpace.SRGB:
         arr = _convert(arr, LINEAR, SRGB)
     fmt = "uint16" if suffix == ".png" else "float"
     with tempfile.TemporaryDirectory(prefix="brdfremap-") as tmp:

@@ -17,7 +17,7 @@ from ..data.metrics import l2
 from ..data.schemas import ModelSpec, Value
 from .levels import Level
 from .residuals import Tally
-from .settled import Settled
+from .settled import Held, Settled
 from .space import ParamSpace
 from .stage import Stage, StageConfig
 from .tuning import Tuning
@@ -61,7 +61,7 @@ def assess(target: ModelSpec, params: dict[str, Value], free: list[str], level: 
     labels = chk.space.labels()
     col = np.linalg.norm(chk.J, axis=0)
     live = col > 1e-6 * max(col.max(), 1e-30)
-    dead = [labels[j] for j in range(len(col)) if not live[j]] + [n for n, h in chk.held.items() if h.why == "inert"]
+    dead = [labels[j] for j in range(len(col)) if not live[j]] + [n for n, h in chk.held.items() if h.why == Held.INERT]
     cond = None
     if live.sum() > 1:
         s = np.linalg.svd(chk.J[:, live] / col[live], compute_uv=False)
@@ -118,7 +118,7 @@ def _pins(target: ModelSpec, params: dict[str, Value], chk: _Check, labels: list
     ph = ParamSpace(target, params, list(chk.held))
     uh = ph.encode(params)
     found += [(n, "lower" if uh[ph.slices[n].start] <= 0.5 else "upper", h.g, h.col, h.rr)
-              for n, h in chk.held.items() if h.why == "pinned"]
+              for n, h in chk.held.items() if h.why == Held.PINNED]
     pins = []
     for lab, side, gj, cj, rrj in found:
         better = math.sqrt(max(rrj - gj ** 2 / cj ** 2, 0.0))

@@ -7,7 +7,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..data.findings import SchemeChosen
-from ..data.schemas import ModelSpec
+from ..data.schemas import Lobe, ModelSpec
+from ..data.settings import Scheme
 
 
 @dataclass(frozen=True)
@@ -22,7 +23,7 @@ class PlannedStage:
 
 @dataclass(frozen=True)
 class Plan:
-    scheme: str
+    scheme: Scheme
     """The scheme actually used: one, two or three."""
     stages: list[PlannedStage]
     findings: list[SchemeChosen]
@@ -35,41 +36,41 @@ def lobes_split(target: ModelSpec, free: list[str]) -> bool:
     the full image: one stage from several starts measured as good, in fewer renders."""
     if not target.has_lobes:
         return False
-    shares = [set(target.lobes[lobe].params) & set(free) for lobe in ("specular", "diffuse")
+    shares = [set(target.lobes[lobe].params) & set(free) for lobe in (Lobe.SPECULAR, Lobe.DIFFUSE)
               if not target.lobes[lobe].empty]
     lobes = [s for s in shares if s]  # a lobe with every parameter held divides nothing
     return len(lobes) < 2 or all(a - b for a, b in (lobes, lobes[::-1]))
 
 
-def plan_stages(scheme: str, target: ModelSpec, free: list[str],
+def plan_stages(scheme: Scheme, target: ModelSpec, free: list[str],
                 source_lobes: dict[str, np.ndarray | None]) -> Plan:
     findings = []
-    if scheme == "auto":
-        scheme = "two" if lobes_split(target, free) else "one"
-        if scheme == "one":
+    if scheme == Scheme.AUTO:
+        scheme = Scheme.TWO if lobes_split(target, free) else Scheme.ONE
+        if scheme == Scheme.ONE:
             why = (f"target model {target.name!r} declares no lobes" if not target.has_lobes else
                    f"every {target.name!r} parameter of one lobe also shapes the other")
-            findings.append(SchemeChosen(scheme="one", why=why))
-    if scheme == "one":
-        return Plan("one", [PlannedStage("all", None, list(free), None)], findings)
-    can_split = target.has_lobes and all(source_lobes.get(lobe) is not None for lobe in ("diffuse", "specular"))
+            findings.append(SchemeChosen(scheme=Scheme.ONE, why=why))
+    if scheme == Scheme.ONE:
+        return Plan(Scheme.ONE, [PlannedStage("all", None, list(free), None)], findings)
+    can_split = target.has_lobes and all(source_lobes.get(lobe) is not None for lobe in Lobe)
     if not can_split:
         why = (f"target model {target.name!r} declares no lobes" if not target.has_lobes
                else "the source model cannot render its lobes separately")
-        findings.append(SchemeChosen(scheme="one", why=f"{scheme}-stage scheme needs lobe isolation: {why}",
+        findings.append(SchemeChosen(scheme=Scheme.ONE, why=f"{scheme}-stage scheme needs lobe isolation: {why}",
                                      fallback=True))
-        return Plan("one", [PlannedStage("all", None, list(free), None)], findings)
+        return Plan(Scheme.ONE, [PlannedStage("all", None, list(free), None)], findings)
     stages = _lobe_stages(target, free)
-    if scheme == "three":
+    if scheme == Scheme.THREE:
         stages.append(PlannedStage("joint", None, list(free), None))
     return Plan(scheme, stages, findings)
 
 
 def _lobe_stages(target: ModelSpec, free: list[str]) -> list[PlannedStage]:
     stages: list[PlannedStage] = []
-    empty = [lobe for lobe in ("specular", "diffuse") if target.lobes[lobe].empty]
+    empty = [lobe for lobe in (Lobe.SPECULAR, Lobe.DIFFUSE) if target.lobes[lobe].empty]
     fitted: set[str] = set()
-    for lobe in ("specular", "diffuse"):
+    for lobe in (Lobe.SPECULAR, Lobe.DIFFUSE):
         spec = target.lobes[lobe]
         if spec.empty:
             continue

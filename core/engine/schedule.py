@@ -17,7 +17,8 @@ from ..data.errors import OptimisationError
 from ..data.findings import ChoiceTried, InputsTried, JointRefined, NoisePolished, PredictionNotRealised, StartKept
 from ..data.metrics import delta_e_itp, l2, relative_rmse
 from ..data.schemas import ModelSpec, Value
-from ..data.settings import Settings
+from ..data.settings import Scheme, Settings
+from ..data.settings import Validation as ValidationPolicy
 from .assess import Assessment, assess
 from .levels import Level, ProgressFn, Renders
 from .plan import Plan, PlannedStage, plan_stages
@@ -278,7 +279,7 @@ def _refine_jointly(run: _Run, plan: Plan, state: _State, assessment: Assessment
     """The merged lobes are provably not a minimum of the full image (a coupling the split cannot
     see, e.g. a little Metallic standing in for Specular): refine jointly from here, again while
     a round ends with a joint step still predicting a gain."""
-    if plan.scheme == "one" or len(plan.stages) < 2:
+    if plan.scheme == Scheme.ONE or len(plan.stages) < 2:
         return state, assessment, _Joint()
     rounds, err0, predicted0 = 0, state.err, assessment.predicted
     while assessment.predicted is not None and rounds < run.tuning.joint_rounds:
@@ -394,7 +395,7 @@ def _conclude(run: _Run, plan: Plan, state: _State, assessment: Assessment, join
     with purpose("noise"):
         target_noise = run.renders.target_noise(state.params)
     with purpose("validation"):
-        validation = run.renders.validation(state.params) if run.settings.validation == "held-out" else Validation()
+        validation = run.renders.validation(state.params) if run.settings.validation == ValidationPolicy.HELD_OUT else Validation()
     floor = run.noise_floor(target_noise)
     limit = run.settings.resolve_limit
     judged = {"scene": floor <= limit, **{c.condition: c.noise_floor <= limit for c in validation.checks}}

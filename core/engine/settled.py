@@ -3,11 +3,19 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from enum import StrEnum
 
 import numpy as np
 
 from .stage import Stage
+from ..data.schemas import ParamKind
+
+
+class Held(StrEnum):
+    """Why the coarse fit settled a parameter: pinned on a bound, or without effect there."""
+
+    PINNED = "pinned"
+    INERT = "inert"
 
 
 @dataclass(frozen=True)
@@ -15,7 +23,7 @@ class Settled:
     """A parameter the coarse fit settled: why, and (pinned) the coarse gradient and column norm
     at its optimum, relative residual units, for the verdict's pinned-bound check."""
 
-    why: Literal["pinned", "inert"]
+    why: Held
     g: float = 0.0
     col: float = 0.0
     rr: float = 0.0
@@ -33,14 +41,14 @@ def settled(stage: Stage) -> dict[str, Settled]:
     out: dict[str, Settled] = {}
     for name, sl in space.slices.items():
         j = sl.start
-        if space.spec.param(name).kind != "scalar" or col[j] == 0:
+        if space.spec.param(name).kind != ParamKind.SCALAR or col[j] == 0:
             continue
         newton = -g[j] / col[j] ** 2
         if (u[j] >= 1.0 and newton > 0.02) or (u[j] <= 0.0 and newton < -0.02):
-            out[name] = Settled("pinned", float(g[j]), float(col[j]), rr)
+            out[name] = Settled(Held.PINNED, float(g[j]), float(col[j]), rr)
     params = space.decode(u)
     for name in space.free:
         deps = space.spec.param(name).inert_when
         if name not in out and space.spec.is_inert(name, params) and all(k in out or k not in space.free for k in deps):
-            out[name] = Settled("inert")
+            out[name] = Settled(Held.INERT)
     return out

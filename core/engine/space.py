@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from ..data.schemas import ModelSpec, Value
+from ..data.schemas import ModelSpec, ParamKind, Scale, Value
 
 
 class ParamSpace:
@@ -24,14 +24,14 @@ class ParamSpace:
 
     def _to_unit(self, name: str, x: float) -> float:
         p = self.spec.param(name)
-        if p.scale == "log":
+        if p.scale == Scale.LOG:
             return math.log(x / p.lower) / math.log(p.upper / p.lower) if x > 0 else 0.0
         return (x - p.lower) / (p.upper - p.lower)
 
     def _from_unit(self, name: str, u: float) -> float:
         p = self.spec.param(name)
         u = min(max(float(u), 0.0), 1.0)
-        if p.scale == "log":
+        if p.scale == Scale.LOG:
             return p.lower * (p.upper / p.lower) ** u
         return p.lower + u * (p.upper - p.lower)
 
@@ -47,7 +47,7 @@ class ParamSpace:
         out = dict(self.base)
         for name, sl in self.slices.items():
             vals = tuple(self._from_unit(name, x) for x in u[sl])
-            out[name] = vals if self.spec.param(name).kind == "rgb" else vals[0]
+            out[name] = vals if self.spec.param(name).kind == ParamKind.RGB else vals[0]
         return out
 
     def labels(self) -> list[str]:
@@ -59,7 +59,7 @@ class ParamSpace:
 
     def separable_groups(self) -> list[slice]:
         return [sl for name, sl in self.slices.items()
-                if self.spec.param(name).kind == "rgb" and self.spec.param(name).separable]
+                if self.spec.param(name).kind == ParamKind.RGB and self.spec.param(name).separable]
 
     def jacobian_renders(self, separable: bool = True) -> int:
         """Renders one forward-difference Jacobian costs (one per separable RGB parameter)."""
@@ -72,4 +72,4 @@ class ParamSpace:
         return (0.0, 1.0) if typical is None else (self._to_unit(name, typical[0]), self._to_unit(name, typical[1]))
 
     def scalar_indices(self) -> list[int]:
-        return [sl.start for name, sl in self.slices.items() if self.spec.param(name).kind == "scalar"]
+        return [sl.start for name, sl in self.slices.items() if self.spec.param(name).kind == ParamKind.SCALAR]

@@ -16,6 +16,7 @@ from .residuals import BudgetExhausted, GoodEnough, Residuals, Tally
 from .results import StageResult
 from .space import ParamSpace
 from .tuning import Tuning
+from ..data.schemas import ParamKind
 
 
 @dataclass(frozen=True)
@@ -172,7 +173,7 @@ class Stage:
             new_vals[j] = v
             pred[ch] = (a * (v / old_vals[j]) - b) / res.norm
         params = dict(self.space.decode(u))
-        params[name] = tuple(new_vals) if spec.kind == "rgb" else new_vals[0]
+        params[name] = tuple(new_vals) if spec.kind == ParamKind.RGB else new_vals[0]
         return l2(pred), self.space.encode(params)
 
 

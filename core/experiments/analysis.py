@@ -8,9 +8,10 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..data.schemas import ModelSpec, Value
+from ..data.schemas import ModelSpec, ParamKind, Scale, Value
 from ..job.report import Report
-from .spec import Experiment, Point, label
+from .spec import Experiment, PlotChannels, Point, label
+from ..data.findings import Status
 
 
 @dataclass
@@ -44,7 +45,7 @@ class Leg:
     @property
     def unstable(self) -> bool:
         """Unreliable for a reason other than a converged model mismatch (trimmed, pinned, ...)."""
-        return self.verdict == "unreliable"
+        return self.verdict == Status.UNRELIABLE
 
 
 @dataclass
@@ -67,7 +68,7 @@ class Row:
     @property
     def mismatch(self) -> bool:
         """Not flagged, but a leg's error is above the threshold: the closest the target model gets."""
-        return not self.flagged and any(leg.verdict == "mismatch" for leg in self.legs)
+        return not self.flagged and any(leg.verdict == Status.MISMATCH for leg in self.legs)
 
     def why(self) -> str:
         parts = list(self.cliff)
@@ -138,12 +139,12 @@ def quantity(row: Row, name: str) -> Value | None:
     return leg.derived.get(key, leg.params.get(key))
 
 
-def channels(v: Value | None, mode: str) -> list[float]:
+def channels(v: Value | None, mode: PlotChannels) -> list[float]:
     """Numbers to plot for one value: a scalar once, an RGB value as its mean or per channel."""
     if v is None or isinstance(v, str):
         return []
     if isinstance(v, (tuple, list)):
-        return [float(np.mean(v))] if mode == "mean" else [float(c) for c in v]
+        return [float(np.mean(v))] if mode == PlotChannels.MEAN else [float(c) for c in v]
     return [float(v)]
 
 
@@ -173,10 +174,10 @@ def _series(exp: Experiment, spec: ModelSpec, rows: list[Row]) -> list[Series]:
     checked = exp.cliff.params or (rows[0].forward.report.fitted if rows else [])
     out: list[Series] = []
     for pname in checked:
-        if pname not in spec.names or spec.param(pname).kind == "choice":
+        if pname not in spec.names or spec.param(pname).kind == ParamKind.CHOICE:
             continue
         ps = spec.param(pname)
-        span = (math.log(ps.upper) - math.log(ps.lower)) if ps.scale == "log" else (ps.upper - ps.lower)
+        span = (math.log(ps.upper) - math.log(ps.lower)) if ps.scale == Scale.LOG else (ps.upper - ps.lower)
         for c in range(ps.size):
             name = pname + ("" if ps.size == 1 else "[" + "rgb"[c] + "]")
             out.append((name, c, ps.scale, span, lambda r, n=pname: r.forward.params.get(n)))
@@ -197,7 +198,7 @@ def _cliffs_of(exp: Experiment, rows: list[Row], idx: list[int], series: Series)
             continue
         yc = float(y[c] if isinstance(y, tuple) else y)
         xv.append(x[c] if len(x) > c else x[0])
-        yv.append(math.log(max(yc, 1e-12)) if scale == "log" else yc)
+        yv.append(math.log(max(yc, 1e-12)) if scale == Scale.LOG else yc)
         members.append(i)
         shown.append(yc)
     out = []

@@ -11,7 +11,7 @@ import numpy as np
 from ..data.atomic import temp_beside, why
 from ..data.errors import ConfigError
 from .analysis import channels, quantity
-from .spec import label
+from .spec import PlotChannels, label
 
 if TYPE_CHECKING:
     from .analysis import Row
@@ -101,7 +101,7 @@ def sweep_plot(base: Path, exp: "Experiment", rows: list["Row"]) -> Path:
     n_cliffs = sum(bool(r.cliff) for r in rows)
     title = exp.plot.title or exp.name
     ax.set_title(f"{title}\n{len(rows)} points, {sum(r.flagged for r in rows)} flagged, {n_cliffs} after a cliff"
-                 + (f"  (channels: {'R ○ G □ B △'})" if exp.plot.channels == "each" else ""), fontsize=9)
+                 + (f"  (channels: {'R ○ G □ B △'})" if exp.plot.channels == PlotChannels.EACH else ""), fontsize=9)
     ax.legend(fontsize=7, loc="best")
     path = _save(fig, base)
     plt.close(fig)

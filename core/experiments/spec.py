@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -71,10 +71,15 @@ class SceneSpec(_Strict):
         return scene.overridden(resolution=self.resolution, spp=self.spp, seed=self.seed)
 
 
+class PlotChannels(StrEnum):
+    MEAN = "mean"
+    EACH = "each"
+
+
 class PlotSpec(_Strict):
     x: str = Field(description="source.<name>: a source parameter or derived quantity.")
     y: str = Field(description="target.<name> (or back.<name> in a round trip).")
-    channels: Literal["mean", "each"] = Field("mean", description="RGB values: their mean, or one point per channel.")
+    channels: PlotChannels = Field(PlotChannels.MEAN, description="RGB values: their mean, or one point per channel.")
     xlabel: str | None = None
     ylabel: str | None = None
     title: str | None = None

@@ -23,9 +23,9 @@ from typing import Callable
 
 import numpy as np
 
-from ..data.appearance import Appearance
+from ..data.appearance import Appearance, Kind
 from ..data.metrics import beyond_noise, relative_rmse
-from ..data.scene import EnvironmentLight, ProbeScene
+from ..data.scene import EnvironmentLight, Lighting, ProbeScene
 from ..engine.results import WHITE, Agreement, Disagreement
 from ..host.protocol import Adapter, check_image
 
@@ -84,7 +84,7 @@ from it on against their rough one (α 0.09): 0.03 lies between the two."""
 def metal_kind(look: Appearance | None) -> str | None:
     """Which of `Adapter.metals` a material read as this is judged against: "smooth", "rough", or
     None (not a metal, or no reading)."""
-    if look is None or look.kind != "conductor":
+    if look is None or look.kind != Kind.CONDUCTOR:
         return None
     return "smooth" if (look.alpha or 0.0) < SMOOTH_METAL else "rough"
 
@@ -142,7 +142,7 @@ def calibration_floors(source: Adapter, target: Adapter,
             reference(source, kind) is None or reference(target, kind) is None:
         return {}
     found = (calibration_floor(source, target, name, label, scenes, metal)
-             for name, label, scenes in conditions if name != "scene")
+             for name, label, scenes in conditions if name != Lighting.SCENE)
     return {d.condition: d for d in found if d is not None}
 
 

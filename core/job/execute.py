@@ -24,7 +24,8 @@ from ..data.atomic import why
 from ..data.errors import RemapError, RenderError
 from ..data.findings import SmoothHeld
 from ..data.imageio import write_exr, write_previews
-from ..data.schemas import Value
+from ..data.schemas import ParamKind, Value
+from ..data.settings import FitScene, Inputs, Start
 from ..engine import ProgressFn, remap
 from ..host.plugins import AdapterRegistry, collect_adapters
 from ..host.protocol import Adapter
@@ -33,6 +34,7 @@ from .job import Job, Resolved, resolve
 from .renders import CachedRenderer, ProbeRenders
 from .report import FileRecord, Report, build_report
 from .texturing import Texturing, texture_result, textured_findings
+from ..data.scene import LightType
 
 
 IMAGES = ("source.exr", "target.exr", "source.png", "target.png", "error.png")
@@ -109,7 +111,7 @@ def run_job(job: Job, renderer_files: tuple[str, ...] = (), progress: ProgressFn
 def fit_policy(job: Job) -> str:
     """`Settings.fit_scene`, but a table's lookup is judged on the scene its direct fits saw: without
     the back light's view (tables are built on the job's scene alone: `Settings.for_study`)."""
-    return "one-view" if job.lookup is not None and job.settings.fit_scene == "auto" else job.settings.fit_scene
+    return FitScene.ONE_VIEW if job.lookup is not None and job.settings.fit_scene == FitScene.AUTO else job.settings.fit_scene
 
 
 def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | None = None) -> Outcome:
@@ -123,7 +125,7 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
     target = CachedRenderer(tgt_adapter, tgt.adapter, tgt.model, job.scene)
     if progress:
         progress("source", 0, float("nan"))
-    env_ok = all("environment" in adapters[n].light_types for n in (src.adapter, tgt.adapter))
+    env_ok = all(LightType.ENVIRONMENT in adapters[n].light_types for n in (src.adapter, tgt.adapter))
     with purpose("fit scene"):
         fit = choose_scene(lambda sc: source(resolved.source_params, scene=sc), job.scene, env_ok,
                            job.settings.resolve_limit, fit_policy(job),
@@ -132,7 +134,7 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
                            source_smooth=resolved.source_spec.is_smooth(resolved.source_params))
     renders = ProbeRenders(source, resolved.source_params, resolved.source_spec, target, fit.scene, given=job.scene,
                            given_noise=fit.scene_noise, resolve_limit=job.settings.resolve_limit)
-    informed = job.settings.start == "informed" and job.lookup is None and job.start is None
+    informed = job.settings.start == Start.INFORMED and job.lookup is None and job.start is None
     smooth = smooth_held(resolved) if job.lookup is None else {}
     start = {**(informed_start(resolved, adapters) if informed else given_start(resolved)), **smooth}
     free = [p for p in fitted(resolved, start) if p not in smooth] if job.lookup is None else []
@@ -144,7 +146,7 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
         ([SmoothHeld(held=smooth)] if smooth else [])
     result = remap(resolved.target_spec, {**resolved.base, **start}, free, renders, job.settings, job.tuning,
                    progress, alternatives=alternatives(resolved, start, smooth) if informed else [], notes=notes,
-                   needed=needed(resolved, adapters, start) if free and job.settings.inputs == "needed" else {})
+                   needed=needed(resolved, adapters, start) if free and job.settings.inputs == Inputs.NEEDED else {})
     files = artifacts(adapters[tgt.adapter], tgt.model, result.params, renders.source_image(), result.target_image,
                       texturing)
     info = describe(adapters, list(dict.fromkeys((src.adapter, tgt.adapter))))
@@ -222,13 +224,13 @@ def informed_start(resolved: Resolved, adapters: AdapterPool) -> dict[str, Value
     out: dict[str, Value] = {}
     spec = resolved.target_spec
     for p in spec.parameters:
-        if (p.kind == "choice" and p.name not in resolved.fixed and conv.get(p.name) in p.choices
+        if (p.kind == ParamKind.CHOICE and p.name not in resolved.fixed and conv.get(p.name) in p.choices
                 and _named(adapters[job.target.adapter], job.target.model, look, resolved.base, p, conv[p.name])):
             out[p.name] = conv[p.name]
     # Held ones too (the source's coat tint is rendered, not fitted), where the choices make them count.
     chosen = {**resolved.base, **out}
     for name in (p.name for p in spec.parameters
-                 if p.kind != "choice" and p.name not in resolved.fixed and spec.is_active(p.name, chosen)):
+                 if p.kind != ParamKind.CHOICE and p.name not in resolved.fixed and spec.is_active(p.name, chosen)):
         try:
             v = spec.param(name).clip(conv[name])
         except (KeyError, TypeError, ValueError):
@@ -250,7 +252,7 @@ def smooth_held(resolved: Resolved) -> dict[str, float]:
 def given_start(resolved: Resolved) -> dict[str, Value]:
     """The job's own start (`Job.start`, coerced by `resolve`), or {}."""
     spec = resolved.target_spec
-    return {k: spec.param(k).clip(tuple(v) if isinstance(v, list) else v) if spec.param(k).kind != "choice" else v
+    return {k: spec.param(k).clip(tuple(v) if isinstance(v, list) else v) if spec.param(k).kind != ParamKind.CHOICE else v
             for k, v in (resolved.job.start or {}).items()}
 
 
@@ -302,7 +304,7 @@ def alternatives(resolved: Resolved, start: dict[str, Value],
     spec = resolved.target_spec
     if smooth and spec.smooth_when and all(smooth.get(k) == v for k, v in spec.smooth_when.items()):
         return []  # a mirror: every microfacet distribution renders it alike (tests/adapters/test_cycles.py)
-    open_ = [p for p in spec.parameters if p.kind == "choice" and p.explore and not same
+    open_ = [p for p in spec.parameters if p.kind == ParamKind.CHOICE and p.explore and not same
              and p.name not in resolved.fixed and p.name not in start]
     combos: list[dict[str, Value]] = [{}]
     for p in open_:

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..data.metrics import l2, relative_rmse
 from ..data.scene import MAX_SPP, EnvironmentLight, PointLight, ProbeScene, View
+from ..data.settings import FitScene as Policy
 from .validation import place_light
 
 GOAL = 0.03
@@ -68,12 +69,12 @@ def _samples_for(noise: float, spp: int) -> int:
 
 
 def choose(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, environment_ok: bool,
-           limit: float, policy: str = "auto", smooth: bool = False, transmissive: bool = False,
+           limit: float, policy: Policy = Policy.AUTO, smooth: bool = False, transmissive: bool = False,
            source_smooth: bool = False) -> FitScene:
     """The fit scene (`choose_lights`; one-view chooses as auto does), with the back light's view where
     ``policy`` is auto and the chosen scene is one of point lights that resolves the source."""
-    back_view = policy == "auto"
-    found = choose_lights(render, scene, environment_ok, limit, "auto" if back_view else policy, smooth,
+    back_view = policy == Policy.AUTO
+    found = choose_lights(render, scene, environment_ok, limit, Policy.AUTO if back_view else policy, smooth,
                           transmissive, source_smooth)
     if not back_view or transmissive or found.scene.views or found.scene.environment is not None \
             or not found.noise <= limit:
@@ -125,7 +126,7 @@ def with_back_light(render: Callable[[ProbeScene], np.ndarray], found: FitScene,
 
 
 def choose_lights(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, environment_ok: bool,
-                  limit: float, policy: str = "auto", smooth: bool = False, transmissive: bool = False,
+                  limit: float, policy: Policy = Policy.AUTO, smooth: bool = False, transmissive: bool = False,
                   source_smooth: bool = False) -> FitScene:
     """The fit scene for a source rendered by ``render(scene)``; ``environment_ok``: both adapters
     render the studio environment; ``limit``: the noise above which a scene cannot resolve;
@@ -135,10 +136,10 @@ def choose_lights(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene,
     a rough glass is 70-130 % noise under the probe at 16 spp, 10-15 % under the studio at 256);
     ``source_smooth``: the source itself is smooth (the studio then at half the size: a rough glass
     fitted to a smooth target keeps the full size)."""
-    if policy == "as-given":
+    if policy == Policy.AS_GIVEN:
         return FitScene(scene)
     noise = source_noise(render, scene)
-    if (smooth or noise == math.inf or (transmissive and noise > GOAL)) and policy == "auto" and environment_ok \
+    if (smooth or noise == math.inf or (transmissive and noise > GOAL)) and policy == Policy.AUTO and environment_ok \
             and scene.environment is None and not scene.views:
         # Taken however noisy: under the point lights there is nothing (or less) to fit (the verdict says how noisy).
         why = "a perfectly smooth material (it shows a point light as a point at most)" if smooth else \
@@ -159,7 +160,7 @@ def choose_lights(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene,
         if n <= min(limit, 2 * GOAL):
             return FitScene(more, f"the source's render noise at {scene.spp} spp is {noise:.1%}: fitted at {spp} spp "
                                   f"({n:.1%})", n, noise)
-    if policy == "auto" and environment_ok and scene.environment is None:
+    if policy == Policy.AUTO and environment_ok and scene.environment is None:
         found = _environment(render, scene, noise, limit, f"the source's render noise at {scene.spp} spp is "
                                                           f"{noise:.0%} (a highlight smaller than a pixel)",
                              half=not transmissive)

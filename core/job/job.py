@@ -18,7 +18,7 @@ from pydantic import Field
 from ..data.errors import ConfigError
 from ..data.model import Strict
 from ..data.scene import MAX_SPP, ProbeScene
-from ..data.schemas import Material, ModelSpec, Value
+from ..data.schemas import Material, ModelSpec, ParamKind, Value
 from ..data.settings import Settings
 from ..engine.tuning import ENGINE_VERSION, Tuning
 from ..host.plugins import AdapterRegistry
@@ -159,7 +159,7 @@ def resolve(job: Job, registry: AdapterRegistry, where: Where = Where()) -> Reso
     if (src.adapter, src.model) == (tgt.adapter, tgt.model):
         # Same model: discrete choices (distribution, material preset) carry over unless fixed.
         for p in tgt_spec.parameters:
-            if p.kind == "choice":
+            if p.kind == ParamKind.CHOICE:
                 base[p.name] = src_params[p.name]
     base.update(fixed)
     if job.lookup is not None:

@@ -14,7 +14,7 @@ import numpy as np
 from ..data.account import purpose
 from ..data.metrics import relative_rmse
 from ..data.scene import ProbeScene
-from ..data.schemas import ModelSpec, Value
+from ..data.schemas import Lobe, ModelSpec, Value
 from ..engine.levels import Level
 from ..engine.results import Agreement, Validation
 from ..engine.schedule import highlight_pixels
@@ -140,7 +140,7 @@ class ProbeRenders:
         then serves the full image from it, where a full image alone is rendered without them."""
         if not lobes:
             return self.source(self.source_params, scene=scene), {}
-        specs = {lobe: self.source_spec.lobes.get(lobe) for lobe in ("diffuse", "specular")}
+        specs = {lobe: self.source_spec.lobes.get(lobe) for lobe in Lobe}
         rendered = {lobe: self.source(self.source_params, lobe, scene=scene)
                     for lobe, spec in specs.items() if spec is not None and not spec.empty}
         full = self.source(self.source_params, scene=scene)

@@ -144,7 +144,7 @@ class Report(WithDerived):
     @computed_field  # type: ignore[prop-decorator]
     @property
     def reliable(self) -> bool:
-        return self.verdict == "ok"
+        return self.verdict == Status.OK
 
     @computed_field  # type: ignore[prop-decorator]
     @property

@@ -17,9 +17,10 @@ from pydantic import Field
 from ..data.errors import RenderError
 from ..data.metrics import beyond_noise, delta_e_itp, relative_rmse
 from ..data.model import Strict
-from ..data.scene import ProbeScene
+from ..data.scene import Lighting, ProbeScene
 from ..data.textures import Texture, TextureMap, encode, kind_of_file
 from ..host.protocol import Adapter, check_image
+from ..data.schemas import ParamKind
 
 CHECK_RESOLUTION, CHECK_SPP = 64, 32
 """The textured check's least resolution and samples (each side twice, for its noise): the scene's
@@ -107,7 +108,7 @@ def texture_result(resolved, source: Adapter | None, target: Adapter, params: di
     files, native, records = {}, {}, []
     for name, values in maps.items():
         p = spec.param(name)
-        suffix, space = kind_of_file(p.lower, p.upper, p.kind == "rgb")
+        suffix, space = kind_of_file(p.lower, p.upper, p.kind == ParamKind.RGB)
         fname = f"map-{name}{suffix}"
         files[fname] = encode(values, suffix, space)
         native[name] = Texture(file=fname, colorspace=space, filter=filt)  # type: ignore[arg-type]
@@ -167,7 +168,7 @@ def _check(resolved, source: Adapter, target: Adapter, inputs, maps: dict[str, n
     src_maps = {n: TextureMap(inputs.source_maps[n], t.filter) for n, t in job.source.textures.items()}
     tgt_maps = {n: TextureMap(v, filt) for n, v in maps.items()}
     checks, images = [], None
-    for condition, scene in (("scene", base), ("environment", studio)):
+    for condition, scene in ((Lighting.SCENE, base), (Lighting.ENVIRONMENT, studio)):
         if source.scene_problem(scene) or target.scene_problem(scene):
             continue
         src, src_noise = _pair(source, job.source.model, resolved.source_params, src_maps, scene, 0, "source")

@@ -17,7 +17,7 @@ import numpy as np
 from pydantic import ValidationError
 
 from ..data.metrics import beyond_noise, delta_e_itp, relative_rmse
-from ..data.scene import MAX_SEED, MAX_SPP, EnvironmentLight, PointLight, ProbeScene
+from ..data.scene import EnvironmentLight, Lighting, MAX_SEED, MAX_SPP, PointLight, ProbeScene
 from ..engine.results import Check, Validation
 
 SPP_FACTOR, MIN_SPP = 4, 64
@@ -37,20 +37,20 @@ class Condition:
 
 
 CONDITIONS = (
-    Condition("grazing", "grazing light", "a point light 80 degrees from the view: light skimming across the sphere",
+    Condition(Lighting.GRAZING, "grazing light", "a point light 80 degrees from the view: light skimming across the sphere",
               (PointLight(theta=80.0),)),
-    Condition("rim", "rim light", "a point light 120 degrees from the view, behind the sphere: a lit rim",
+    Condition(Lighting.RIM, "rim light", "a point light 120 degrees from the view, behind the sphere: a lit rim",
               (PointLight(theta=120.0),)),
-    Condition("headlight", "headlight", "a point light on the view axis, in front of the sphere",
+    Condition(Lighting.HEADLIGHT, "headlight", "a point light on the view axis, in front of the sphere",
               (PointLight(theta=0.0),)),
-    Condition("environment", "studio environment", "the built-in studio environment (key, fill and rim lights)",
+    Condition(Lighting.ENVIRONMENT, "studio environment", "the built-in studio environment (key, fill and rim lights)",
               (EnvironmentLight(type="environment", map="studio"),)),
 )
 
 
 def given_condition(scene: ProbeScene) -> Condition:
     """The job's scene's own lights as a condition: checked when the fit ran under other lights."""
-    return Condition("given", "scene as given", f"the job's scene ({scene.name}) with its own lights, which the fit "
+    return Condition(Lighting.GIVEN, "scene as given", f"the job's scene ({scene.name}) with its own lights, which the fit "
                      "did not use", tuple(scene.view_scenes()[0].lights), given=True)
 
 

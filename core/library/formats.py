@@ -14,6 +14,7 @@ from typing import Any, Protocol
 from ..data.errors import ConfigError
 from .entries import Converted, Entry, Reader
 from .yaml_reader import YamlReader
+from ..data.schemas import ParamKind
 
 __all__ = ["Converted", "Entry", "Reader", "Writer", "Formats", "collect_formats", "expand_inputs", "read_all",
            "clip_into"]
@@ -125,7 +126,7 @@ def clip_into(spec, params: dict) -> list[str]:
     notes = []
     for name, v in list(params.items()):
         p = spec.param(name)
-        if p.kind == "choice":
+        if p.kind == ParamKind.CHOICE:
             if v not in p.choices:
                 shown = ", ".join(p.choices[:8]) + (" …" if len(p.choices) > 8 else "")
                 raise ConfigError(f"{name} {v!r} is not one of the {spec.name!r} model's choices ({shown})")

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 from ..data.atomic import write_text_atomic
 from ..data.schemas import format_value
 from .records import ItemStatus
+from ..data.scene import Lighting
 
 if TYPE_CHECKING:
     from .convert import Conversion, Item
@@ -56,7 +57,7 @@ def _textures(rep, folder: str) -> dict | None:
             "maps": [{"param": m.param, "href": f"{folder}/{m.file}", "space": m.colorspace,
                       "range": f"{m.low:.3g} to {m.high:.3g}"} for m in t.maps],
             "images": [f"{folder}/textured-{n}.png" for n in ("source", "target", "error")] if t.checks else [],
-            "lit": "studio" if t.checks[-1:] and t.checks[-1].condition == "environment" else "scene lights",
+            "lit": "studio" if t.checks[-1:] and t.checks[-1].condition == Lighting.ENVIRONMENT else "scene lights",
             "checks": [{"condition": c.condition, "error": c.error, "noise": c.noise_floor, "de": c.perceptual,
                         "resolution": c.resolution, "spp": c.spp} for c in t.checks],
             "skipped": t.check_skipped, "held": list(t.held.values()), "outside": t.outside, "notes": t.notes}

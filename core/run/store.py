@@ -197,7 +197,7 @@ def _ours(path: Path) -> bool:
     if not isinstance(doc, dict):
         return False
     tool = doc.get("tool")
-    return (isinstance(tool, str) and tool.startswith("brdf-remap")) or {"engine", "metrics", "options"} <= set(doc)
+    return (isinstance(tool, str) and tool.split(" ", 1)[0] == "brdf-remap") or {"engine", "metrics", "options"} <= set(doc)
 
 
 def _listed_files(folder: Path) -> set[str]:

@@ -14,12 +14,16 @@ import csv
 import io
 import math
 import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ..data.atomic import write_text_atomic
 from ..data.errors import ConfigError
+from ..data.settings import Validation
 from ..host.plugins import AdapterRegistry
 from ..job.job import Lookup
 from ..run.executors import Workers
@@ -27,7 +31,7 @@ from ..run.runner import Done, Runner
 from ..run.store import Store, owned
 from .colours import choose_degree, shared_outputs
 from .maps import METHODS, build, choose_hyperparameter
-from .outputs import choose_scales, outputs_for
+from .outputs import ERROR, Output, OutputKind, choose_scales, outputs_for
 from .plan import Plan, fitted_names, plan, point_task, record, shown
 from .refits import (continue_points, follow_colours, follow_points, leave_out_cliffs, refits_account,
                      remedy_points)
@@ -36,6 +40,9 @@ from .table import (
     TABLE_SCHEMA_VERSION,
     BuildRecord,
     Candidate,
+    Channels,
+    LeftOut,
+    PointRecord,
     Table,
     TableMap,
     correction_rows,
@@ -64,7 +71,7 @@ def fit_candidates(draft: Table) -> dict[str, Candidate]:
             continue
         out[method] = Candidate(method=method, hyper=hyper, cv_rms=cv)
         if _shares_channels(draft):  # the same map, the colour read at its mean grey level
-            out[f"{method}-mean"] = out[method].model_copy(update={"channels": "mean"})
+            out[f"{method}-mean"] = out[method].model_copy(update={"channels": Channels.MEAN})
     if draft.colours:
         out.update(corrected_candidates(draft, out))
     return out
@@ -98,7 +105,36 @@ def corrected_candidates(draft: Table, candidates: dict[str, Candidate]) -> dict
 def _shares_channels(draft: Table) -> bool:
     """Whether some output is shared by the channels of a grey `scale` axis (a scalar target parameter)."""
     return bool(draft.layout.grey_axes) and any(
-        o.kind != "error" and not o.per_channel and o.channel is None for o in draft.outputs)
+        o.kind != OutputKind.ERROR and not o.per_channel and o.channel is None for o in draft.outputs)
+
+
+@dataclass(frozen=True)
+class Parts:
+    """What the build's stages give, from which `assemble_table` makes the table."""
+
+    points: list[PointRecord]
+    holdout: list[PointRecord]
+    colours: list[PointRecord]
+    outputs: list[Output]
+    candidates: dict[str, Candidate] = field(default_factory=dict)
+    chosen: str = ""
+    chosen_why: str = ""
+    build: BuildRecord = field(default_factory=lambda: BuildRecord(
+        points=0, used=0, flagged=0, left_out=0, holdout=0, renders=0, seconds=0, wall_seconds=0, ran_in=""))
+
+
+@dataclass(frozen=True)
+class Fits:
+    """The build's first fits (grid, held-out, coloured) and the grid's and coloured points' records
+    after the remedies and path following."""
+
+    firsts: list[PointRecord]
+    points: list[PointRecord]
+    held: list[PointRecord]
+    first_colours: list[PointRecord]
+    colours: list[PointRecord]
+    fitted: list[str]
+    first: Any
 
 
 def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRegistry, workers: Workers, *,
@@ -106,60 +142,102 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
     t0 = time.perf_counter()
     p = plan(spec, file, registry)
     scene = spec.scene.scene(Path(file).resolve().parent)
-    grid_ids, grid_tasks = _tasks(p, registry, scene, "points", "g{:04d}", [v for _, v in p.grid])
-    held_ids, held_tasks = _tasks(p, registry, scene, "holdout", "h{:03d}", p.held)
-    # The coloured points' fits after the grid's: a rerun resumes the grid first.
-    colour_ids, colour_tasks = _tasks(p, registry, scene, "colours", "c{:04d}", p.colours)
     with owned(out) as folder:
         runner = Runner(Store(folder), workers, renderer_files=tuple(registry.loaded_files()), quiet=quiet,
                         stop_on_error=False, line=_line)
-        done = runner.run(grid_tasks + held_tasks + colour_tasks)
-        n, m = len(grid_tasks), len(grid_tasks) + len(held_tasks)
-        grid_done, held_done, colour_done = done[:n], done[n:m], done[m:]
-        firsts = [record(k, v, d, idx) for k, (idx, v), d in zip(grid_ids, p.grid, grid_done)]
-        points = _refitted(p, registry, runner, scene, firsts)
-        first_colours = [record(k, v, d) for k, v, d in zip(colour_ids, p.colours, colour_done)]
-        colours = remedy_points(p, registry, runner, scene, first_colours, "colours")
+        fits = fit_points(p, registry, runner, scene)
+
+        def draft(parts: Parts) -> Table:
+            return assemble_table(p, file, scene, fits.first, parts)
+
         need = len(p.layout.dims) + 2
-        if sum(pt.used for pt in points) < need:
-            write_points_csv(folder / "points.csv", _draft(p, file, spec, points, [], [], None, scene))
-            raise ConfigError(f"{sum(pt.used for pt in points)} of {len(points)} grid points gave a fit the map can "
-                              f"use, and a map over {need - 2} dimensions needs {need}: see points.csv for why",
-                              file=file)
-        held = [record(k, v, d) for k, v, d in zip(held_ids, p.held, held_done)]
-        first = (next((d.report for d, pt in zip(grid_done, points) if pt.used and d.report is not None), None)
-                 or next(d.report for d in grid_done if d.report is not None))  # a followed point's may have failed
-        draft = _draft(p, file, spec, points, held, fitted_names(p, points, grid_done), first, scene
-                       ).model_copy(update={"colours": colours})
-        draft = draft.model_copy(update={"outputs": choose_scales(draft.outputs, lambda o: grid_of(draft, o))})
-        if spec.follow and draft.colours:
-            draft = draft.model_copy(update={"colours": follow_colours(p, registry, runner, draft)})
-        if spec.continuation:
-            draft = draft.model_copy(update={"points": continue_points(p, registry, runner, draft)})
-        kept = leave_out_cliffs(draft)
-        cliffs = sum(a.used and not b.used for a, b in zip(draft.points, kept))
-        draft = draft.model_copy(update={"points": kept})
-        draft = draft.model_copy(update={"candidates": fit_candidates(draft)})
-        if all(c.problem for c in draft.candidates.values()):
-            raise ConfigError("no map could be fitted to the grid: " + "; ".join(
-                f"{m}: {c.problem}" for m, c in draft.candidates.items()), file=file)
-        candidates = _check_holdout(p, registry, runner, draft)
-        chosen, why = choose(candidates)
-        table = draft.model_copy(update={"candidates": candidates, "chosen": chosen, "chosen_why": why})
-        renders, seconds = checks_account(folder, table)
-        final = table.points  # after continuation and the cliffs
-        refit_renders, refit_seconds = refits_account(folder, final, follow=tuple(spec.follow))
-        colour_renders, colour_seconds = refits_account(folder, colours, "colours", follow=tuple(spec.follow))
-        table = table.model_copy(update={"build": BuildRecord(
-            points=len(final), used=sum(pt.used for pt in final),
-            flagged=sum(pt.verdict.flagged for pt in final),
-            left_out=sum(not pt.used for pt in final), cliffs=cliffs, holdout=len(held),
-            renders=sum(pt.renders for pt in firsts + held + first_colours) + renders + refit_renders + colour_renders,
-            seconds=sum(pt.seconds for pt in firsts + held + first_colours) + seconds + refit_seconds + colour_seconds,
-            wall_seconds=time.perf_counter() - t0, ran_in=workers.where)})
+        if sum(pt.used for pt in fits.points) < need:
+            write_points_csv(folder / "points.csv", draft(Parts(fits.points, [], [], [])))
+            raise ConfigError(f"{sum(pt.used for pt in fits.points)} of {len(fits.points)} grid points gave a fit "
+                              f"the map can use, and a map over {need - 2} dimensions needs {need}: see points.csv "
+                              "for why", file=file)
+        parts = refine(p, registry, runner, draft, fits)
+        parts = replace(parts, **choose_map(p, registry, runner, draft, parts))
+        table = draft(replace(parts, build=account(folder, spec, fits, parts, time.perf_counter() - t0,
+                                                   workers.where)))
         write_table(folder / "table.json", table)
         write_points_csv(folder / "points.csv", table)
     return table
+
+
+def assemble_table(p: Plan, file: str, scene, first, parts: Parts) -> Table:
+    """The table, in one place, from its parts (a draft while the parts lack their maps)."""
+    from .. import __version__
+
+    return Table(schema_version=TABLE_SCHEMA_VERSION, tool=f"brdf-remap {__version__}",
+                 name=p.spec.name or Path(file).stem, spec=p.spec, scene=scene, source_kinds=p.layout.kinds,
+                 source_params=p.source_params, target_params=p.target_spec.complete(first.params if first else {}),
+                 versions=first.job.versions if first else {}, outputs=parts.outputs, points=parts.points,
+                 holdout=parts.holdout, colours=parts.colours, candidates=parts.candidates, chosen=parts.chosen,
+                 chosen_why=parts.chosen_why, build=parts.build)
+
+
+def fit_points(p: Plan, registry: AdapterRegistry, runner: Runner, scene) -> Fits:
+    """Every grid point, held-out material and coloured point fitted (the coloured points after the
+    grid's: a rerun resumes the grid first), the grid's and coloured points' remedies, and path
+    following along the axes of ``follow``."""
+    grid_ids, grid_tasks = _tasks(p, registry, scene, "points", "g{:04d}", [v for _, v in p.grid])
+    held_ids, held_tasks = _tasks(p, registry, scene, "holdout", "h{:03d}", p.held)
+    colour_ids, colour_tasks = _tasks(p, registry, scene, "colours", "c{:04d}", p.colours)
+    done = runner.run(grid_tasks + held_tasks + colour_tasks)
+    n, m = len(grid_tasks), len(grid_tasks) + len(held_tasks)
+    grid_done, held_done, colour_done = done[:n], done[n:m], done[m:]
+    firsts = [record(k, v, d, idx) for k, (idx, v), d in zip(grid_ids, p.grid, grid_done)]
+    points = _refitted(p, registry, runner, scene, firsts)
+    first_colours = [record(k, v, d) for k, v, d in zip(colour_ids, p.colours, colour_done)]
+    first = (next((d.report for d, pt in zip(grid_done, points) if pt.used and d.report is not None), None)
+             or next((d.report for d in grid_done if d.report is not None), None))  # a followed point's may fail
+    return Fits(firsts=firsts, points=points, held=[record(k, v, d) for k, v, d in zip(held_ids, p.held, held_done)],
+                first_colours=first_colours,
+                colours=remedy_points(p, registry, runner, scene, first_colours, "colours"),
+                fitted=fitted_names(p, points, grid_done), first=first)
+
+
+def refine(p: Plan, registry: AdapterRegistry, runner: Runner, draft: Callable[[Parts], Table], fits: Fits) -> Parts:
+    """The outputs' scales chosen on the grid, the coloured points followed from the grid's map and
+    the grid continued from its neighbours' (where the spec asks), and the cliffs left out."""
+    parts = Parts(fits.points, fits.held, fits.colours, outputs_for(p.target_spec, fits.fitted, p.layout.separable))
+    unscaled = draft(parts)
+    parts = replace(parts, outputs=choose_scales(parts.outputs, lambda o: grid_of(unscaled, o)))
+    scaled = draft(parts)
+    colours = follow_colours(p, registry, runner, scaled) if p.spec.follow and parts.colours else parts.colours
+    points = continue_points(p, registry, runner, scaled) if p.spec.continuation else parts.points
+    return replace(parts, points=leave_out_cliffs(draft(replace(parts, points=points, colours=colours))),
+                   colours=colours)
+
+
+def choose_map(p: Plan, registry: AdapterRegistry, runner: Runner, draft: Callable[[Parts], Table],
+               parts: Parts) -> dict:
+    """Each kind of map fitted to the grid and checked on the held-out materials, and the one
+    chosen, with why (`Parts`' fields)."""
+    fitted = fit_candidates(draft(parts))
+    if all(c.problem for c in fitted.values()):
+        raise ConfigError("no map could be fitted to the grid: " + "; ".join(
+            f"{m}: {c.problem}" for m, c in fitted.items()), file=p.file)
+    candidates = _check_holdout(p, registry, runner, draft(replace(parts, candidates=fitted)))
+    chosen, why = choose(candidates)
+    return {"candidates": candidates, "chosen": chosen, "chosen_why": why}
+
+
+def account(folder: Path, spec: TableSpec, fits: Fits, parts: Parts, wall: float, where: str) -> BuildRecord:
+    """What the build did and cost: its points, and the renders and seconds of every fit, refit and
+    check (resumed ones included, from their stored results)."""
+    renders, seconds = checks_account(folder, parts.candidates, parts.holdout)
+    refit_renders, refit_seconds = refits_account(folder, parts.points, follow=tuple(spec.follow))
+    colour_renders, colour_seconds = refits_account(folder, fits.colours, "colours", follow=tuple(spec.follow))
+    firsts = fits.firsts + fits.held + fits.first_colours
+    final = parts.points
+    return BuildRecord(points=len(final), used=sum(pt.used for pt in final),
+                       flagged=sum(pt.verdict.flagged for pt in final), left_out=sum(not pt.used for pt in final),
+                       cliffs=sum(pt.left_out_as == LeftOut.CLIFF for pt in final), holdout=len(fits.held),
+                       renders=sum(pt.renders for pt in firsts) + renders + refit_renders + colour_renders,
+                       seconds=sum(pt.seconds for pt in firsts) + seconds + refit_seconds + colour_seconds,
+                       wall_seconds=wall, ran_in=where)
 
 
 def _tasks(p: Plan, registry: AdapterRegistry, scene, folder: str, ids: str, values: list) -> tuple[list, list]:
@@ -178,28 +256,13 @@ def _refitted(p: Plan, registry: AdapterRegistry, runner: Runner, scene, firsts:
     return points
 
 
-def _draft(p: Plan, file: str, spec: TableSpec, points, held, names, first, scene) -> Table:
-    """The table without its maps' account yet."""
-    from .. import __version__
-
-    return Table(schema_version=TABLE_SCHEMA_VERSION, tool=f"brdf-remap {__version__}",
-                 name=spec.name or Path(file).stem, spec=spec, scene=scene, source_kinds=p.layout.kinds,
-                 source_params=p.source_params,
-                 target_params=p.target_spec.complete(first.params if first else {}),
-                 versions=first.job.versions if first else {}, outputs=outputs_for(p.target_spec, names,
-                                                                                   p.layout.separable),
-                 points=points, holdout=held, candidates={}, chosen="", chosen_why="",
-                 build=BuildRecord(points=0, used=0, flagged=0, left_out=0, holdout=0, renders=0, seconds=0,
-                                   wall_seconds=0, ran_in=""))
-
-
-def checks_account(folder: Path, table: Table) -> tuple[int, float]:
-    """Target renders and seconds of this table's stored lookups (checks/<map>/<held-out id>)."""
+def checks_account(folder: Path, candidates: dict[str, Candidate], holdout: list[PointRecord]) -> tuple[int, float]:
+    """Target renders and seconds of the stored lookups of the held-out materials (checks/<map>/<id>)."""
     from ..job.report import read_report
 
     renders, seconds = 0, 0.0
-    for method, c in table.candidates.items():
-        for h, err in zip(table.holdout, c.holdout_errors):
+    for method, c in candidates.items():
+        for h, err in zip(holdout, c.holdout_errors):
             if err is None:
                 continue
             try:
@@ -216,7 +279,7 @@ def _check_holdout(p: Plan, registry: AdapterRegistry, runner: Runner, draft: Ta
     fitted = [(i, h) for i, h in enumerate(draft.holdout) if h.error is not None]
     if not fitted:
         return draft.candidates
-    settings = draft.spec.options.for_study().model_copy(update={"validation": "none"})
+    settings = draft.spec.options.for_study().model_copy(update={"validation": Validation.NONE})
     tasks, where = [], []
     for method, c in draft.candidates.items():
         if c.problem:
@@ -264,7 +327,7 @@ def choose(candidates: dict[str, Candidate]) -> tuple[str, str]:
                       f"{c.median_ratio:.3f}, 95th percentile {c.p95_ratio:.3f} of the direct fit's error")
 
     def cv(m: str) -> float:
-        vals = [v for k, v in candidates[m].cv_rms.items() if k != "error" and v is not None]
+        vals = [v for k, v in candidates[m].cv_rms.items() if k != ERROR and v is not None]
         return float(np.mean(vals)) if vals and not candidates[m].problem else math.inf
 
     best = min(candidates, key=lambda m: (round(cv(m), 4), _preference(candidates[m])))
@@ -274,7 +337,7 @@ def choose(candidates: dict[str, Candidate]) -> tuple[str, str]:
 def _preference(c: Candidate) -> tuple[int, bool, bool]:
     """Among maps that do equally well: the smoother kind, then the colour read channel by channel,
     then the map without a correction."""
-    return PREFERENCE.index(c.method), c.channels != "weighted", c.correction is not None
+    return PREFERENCE.index(c.method), c.channels != Channels.WEIGHTED, c.correction is not None
 
 
 def write_points_csv(path: Path, table: Table) -> Path:
@@ -285,7 +348,7 @@ def write_points_csv(path: Path, table: Table) -> Path:
             row = {"kind": kind, "id": pt.id}
             row.update({f"source.{k}": _cell(v) for k, v in pt.values.items()})
             row.update({f"target.{o.param}": _cell((pt.params or {}).get(o.param)) for o in table.outputs
-                        if o.kind != "error"})
+                        if o.kind != OutputKind.ERROR})
             row.update({"error": _cell(pt.error), "noise_floor": _cell(pt.noise_floor), "verdict": pt.verdict,
                         "used": pt.used, "left_out": pt.left_out, "reason": pt.reason, "refit": pt.remedy})
             rows.append(row)

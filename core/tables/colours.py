@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .maps import folds, monomials
-from .outputs import Output
+from .outputs import Output, OutputKind
 from .spec import Layout
 
 DEGREES = (0, 1, 2)
@@ -38,7 +38,7 @@ this many rounds): a point whose fit found another optimum pulls it little."""
 
 def shared_outputs(outputs: list[Output]) -> list[Output]:
     """The target parameters the channels share (a roughness, an IOR)."""
-    return [o for o in outputs if o.kind != "error" and not o.per_channel and o.channel is None]
+    return [o for o in outputs if o.kind != OutputKind.ERROR and not o.per_channel and o.channel is None]
 
 
 def gaps(outputs: list[Output], values: dict[str, np.ndarray], spread: dict) -> np.ndarray:

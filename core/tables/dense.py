@@ -9,7 +9,7 @@ import itertools
 
 import numpy as np
 
-from .outputs import ERROR, assemble
+from .outputs import assemble, ERROR, OutputKind
 from .spec import Axis
 from .table import TableMap
 
@@ -87,7 +87,7 @@ class DenseMap:
                 cells[channel] = _Cells(layout.columns(values, channel, np.float32), self.shape)
             return cells[channel]
 
-        outputs = [o for o in self.table.outputs if errors or o.kind != "error"]
+        outputs = [o for o in self.table.outputs if errors or o.kind != OutputKind.ERROR]
         return assemble(outputs,
                         lambda o: [_decode(o, at(c).interpolate(self.luts[o.label])) for c in range(3)],
                         lambda o: _decode(o, at(None).interpolate(self.luts[o.label])),

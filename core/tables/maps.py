@@ -154,15 +154,20 @@ class Rbf:
 METHODS = {"multilinear": Multilinear, "polynomial": Polynomial, "rbf": Rbf}
 
 
+def _degrees(grid: Grid) -> list[float | int | None]:
+    """The polynomial degrees with at most half as many terms as used points (at least the first)."""
+    n = int(grid.used.sum())
+    fits = [d for d in POLY_DEGREES if len(monomials(grid.x.shape[1], d)) <= max(2, n // 2)]
+    return list(fits or POLY_DEGREES[:1])
+
+
+HYPERPARAMETERS = {"polynomial": _degrees, "rbf": lambda grid: list(RBF_SMOOTHING), "multilinear": lambda grid: [None]}
+"""Per kind of map (`METHODS`): the hyperparameters cross-validation chooses among, for a grid."""
+
+
 def hyperparameters(method: str, grid: Grid) -> list[float | int | None]:
     """The hyperparameters cross-validation chooses among, for this much data."""
-    n = int(grid.used.sum())
-    if method == "polynomial":
-        fits = [d for d in POLY_DEGREES if len(monomials(grid.x.shape[1], d)) <= max(2, n // 2)]
-        return list(fits or POLY_DEGREES[:1])
-    if method == "rbf":
-        return list(RBF_SMOOTHING)
-    return [None]
+    return HYPERPARAMETERS[method](grid)
 
 
 def folds(n: int, k: int = FOLDS, seed: int = 0) -> list[np.ndarray]:

@@ -11,14 +11,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from typing import Any, Literal
+from enum import StrEnum
+from typing import Any
 
 import numpy as np
 from pydantic import Field
 
 from ..data.appearance import eta_k_from_reflectivity, reflectivity_edge_tint
 from ..data.model import Strict
-from ..data.schemas import ModelSpec, ParamSpec
+from ..data.schemas import ModelSpec, ParamKind, ParamSpec, Scale
 from .spec import CHANNELS
 
 ERROR = "error"
@@ -26,18 +27,26 @@ ERROR = "error"
 PARTS = ("reflectivity", "edge_tint")
 
 
+class OutputKind(StrEnum):
+    """What an output maps: a scalar parameter, an RGB one (or a channel of it), or the fit's error."""
+
+    SCALAR = "scalar"
+    RGB = "rgb"
+    ERROR = "error"
+
+
 class Output(Strict):
     """One regressed quantity: a target parameter (or one channel of it), on its unit scale."""
 
     param: str
-    kind: Literal["scalar", "rgb", "error"]
+    kind: OutputKind
     channel: int | None = Field(None, description="The channel of an RGB parameter mapped by a regression of its "
                                                   "own (a full regression); None otherwise.")
     per_channel: bool = Field(False, description="An RGB parameter whose one regression is applied to each channel "
                                                  "with that channel of the source's colours (the separable form).")
     lower: float
     upper: float
-    scale: Literal["linear", "log"]
+    scale: Scale
     via: list[str] = Field(default_factory=list, description="For a conductor's reflectivity or edge tint (`param`): "
                                                              "the target's eta and k it stands for.")
     via_upper: list[float] = Field(default_factory=list, description="Their upper bounds (both have 0 below).")
@@ -48,14 +57,14 @@ class Output(Strict):
 
     def to_unit(self, v) -> np.ndarray:
         v = np.asarray(v, np.float64)
-        if self.scale == "log":
+        if self.scale == Scale.LOG:
             return (np.log(np.maximum(v, self.lower)) - math.log(self.lower)) / (math.log(self.upper) -
                                                                                   math.log(self.lower))
         return (v - self.lower) / (self.upper - self.lower)
 
     def from_unit(self, t, dtype=np.float64) -> np.ndarray:
         t = np.clip(np.asarray(t, dtype), dtype(0.0), dtype(1.0))
-        if self.scale == "log":
+        if self.scale == Scale.LOG:
             lo, hi = math.log(self.lower), math.log(self.upper)
             return np.exp(dtype(lo) + t * dtype(hi - lo))
         return dtype(self.lower) + t * dtype(self.upper - self.lower)
@@ -81,9 +90,9 @@ def outputs_for(spec: ModelSpec, names: list[str], separable: bool) -> list[Outp
 
 
 def _channels(p: ParamSpec, separable: bool, **common) -> list[Output]:
-    if p.kind == "rgb" and separable and p.separable:
+    if p.kind == ParamKind.RGB and separable and p.separable:
         return [Output(kind="rgb", per_channel=True, **common)]
-    if p.kind == "rgb":
+    if p.kind == ParamKind.RGB:
         return [Output(kind="rgb", channel=c, **common) for c in range(3)]
     return [Output(kind="scalar", **common)]
 
@@ -94,7 +103,7 @@ def target_value(params: dict[str, Any] | None, error: float | None, output: Out
     output's own channel, else ``channel``, else the mean of the three."""
     if params is None:
         return math.nan
-    if output.kind == "error":
+    if output.kind == OutputKind.ERROR:
         return float(output.to_unit(error)) if error else math.nan
     if output.via:
         if any(n not in params for n in output.via):
@@ -104,7 +113,7 @@ def target_value(params: dict[str, Any] | None, error: float | None, output: Out
         v = params.get(output.param)
         if v is None:
             return math.nan
-    if output.kind == "rgb":
+    if output.kind == OutputKind.RGB:
         c = output.channel if output.channel is not None else channel
         v = float(np.mean(v)) if c is None else float(np.asarray(v)[c])
     return float(output.to_unit(v))
@@ -130,7 +139,7 @@ def assemble(outputs: list[Output], each_channel: Callable[[Output], Sequence[np
         elif o.channel is not None:
             chans.setdefault(o.param, [None] * 3)[o.channel] = at_mean(o)
         else:
-            if weights is not None or (correct is not None and o.kind != "error"):
+            if weights is not None or (correct is not None and o.kind != OutputKind.ERROR):
                 spread[o.param] = each_channel(o)
             if weights is None:
                 out[o.param] = at_mean(o)
@@ -183,7 +192,7 @@ def param_bounds(outputs: list[Output]) -> dict[str, tuple[float, float]]:
     for o in outputs:
         if o.via:
             out.update({o.via[0]: (0.0, o.via_upper[0]), o.via[1]: (0.0, o.via_upper[1])})
-        elif o.kind != "error":
+        elif o.kind != OutputKind.ERROR:
             out[o.param] = (o.lower, o.upper)
     return out
 
@@ -203,11 +212,11 @@ def choose_scales(outputs: list[Output], grid_of) -> list[Output]:
     for o in outputs:
         grid = grid_of(o)
         values = o.from_unit(grid.y)[grid.used]
-        if o.kind == "error" or not values.size or float(values.min()) <= 0:
+        if o.kind == OutputKind.ERROR or not values.size or float(values.min()) <= 0:
             out.append(o)
             continue
-        other = o.model_copy(update={"scale": "linear"} if o.scale == "log" else
-                             {"scale": "log", "lower": max(o.lower, float(values.min()) / 2)})
+        other = o.model_copy(update={"scale": Scale.LINEAR} if o.scale == Scale.LOG else
+                             {"scale": Scale.LOG, "lower": max(o.lower, float(values.min()) / 2)})
         own, alt = (_cv_error(enc, grid_of(enc), o.to_unit(values), o) for enc in (o, other))
         out.append(other if alt < LOG_GAIN * own else o)
     return out

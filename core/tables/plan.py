@@ -7,13 +7,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..data.errors import ConfigError
-from ..data.findings import CannotResolve, ImagePrecision, NoEffect, NotAtMinimum, RendererAlters
-from ..data.schemas import Material, ModelSpec
+from ..data.findings import CannotResolve, ImagePrecision, NoEffect, NotAtMinimum, RendererAlters, Severity
+from ..data.schemas import Material, ModelSpec, ParamKind
 from ..host.plugins import AdapterRegistry
 from ..job.job import Job, Lookup, Where, model_of, resolve
 from ..run.runner import Done, Task
-from .spec import Layout, TableSpec
-from .table import PointRecord, PointVerdict
+from .spec import AxisMode, Layout, TableSpec
+from .table import LeftOut, PointRecord, PointVerdict
 
 QUESTIONED = (NotAtMinimum, CannotResolve, ImagePrecision, RendererAlters, NoEffect)
 """Findings that put the fit itself in question (it may not be the best this target does): such a
@@ -49,7 +49,7 @@ def plan(spec: TableSpec, file: str, registry: AdapterRegistry) -> Plan:
         kinds[name] = _axis_kind(src, name, ax, params, file)
     same = (spec.source.adapter, spec.source.model) == (spec.target.adapter, spec.target.model)
     for p in tgt.parameters:
-        if p.kind == "choice" and p.explore and not same and p.name not in spec.target.fix:
+        if p.kind == ParamKind.CHOICE and p.explore and not same and p.name not in spec.target.fix:
             raise ConfigError(f"the fit would try each {p.name} and keep the best, point by point, and a map cannot "
                               f"follow a choice: hold it (target.fix.{p.name}: one of {', '.join(p.choices)})",
                               file=file, field="target.fix")
@@ -71,7 +71,7 @@ def _axis_kind(src: ModelSpec, name: str, ax, params: dict, file: str) -> str:
         raise ConfigError(f"model {src.name!r} has no parameter {name!r} (known: {', '.join(src.names)})", file=file,
                           field=field)
     p = src.param(name)
-    if p.kind == "choice":
+    if p.kind == ParamKind.CHOICE:
         raise ConfigError(f"{name} is a choice ({', '.join(p.choices)}): an axis is a continuous parameter; give "
                           "the choice in source.params (a table per value)", file=file, field=field)
     if not src.is_active(name, params):
@@ -81,9 +81,9 @@ def _axis_kind(src: ModelSpec, name: str, ax, params: dict, file: str) -> str:
     if lo < p.lower or hi > p.upper:
         raise ConfigError(f"range [{lo:g}, {hi:g}] goes outside {name}'s bounds [{p.lower:g}, {p.upper:g}]",
                           file=file, field=f"{field}.range")
-    if p.kind == "scalar" and ax.mode == "channels":
+    if p.kind == ParamKind.SCALAR and ax.mode == AxisMode.CHANNELS:
         raise ConfigError("mode channels is for an RGB parameter", file=file, field=f"{field}.mode")
-    if p.kind == "rgb" and ax.mode == "scale" and not p.separable:
+    if p.kind == ParamKind.RGB and ax.mode == AxisMode.SCALE and not p.separable:
         raise ConfigError(f"{name}'s channels do not act alone in the image, so a grey sample cannot stand for a "
                           "colour: use mode: channels", file=file, field=f"{field}.mode")
     return p.kind
@@ -115,13 +115,14 @@ def record(point_id: str, values: dict, done: Done, index: tuple[int, ...] = ())
     if r is None:
         return PointRecord(id=point_id, index=list(index), values=values, params=None, error=None,
                            verdict=PointVerdict.FAILED, reason=done.error, used=False,
-                           left_out=f"the fit failed: {done.error}")
-    kinds = [f.kind for f in r.findings if f.severity == "unreliable"]
-    questioned = [f.message for f in r.findings if f.severity == "unreliable" and isinstance(f, QUESTIONED)]
+                           left_out=f"the fit failed: {done.error}", left_out_as=LeftOut.FAILED)
+    kinds = [f.kind for f in r.findings if f.severity == Severity.UNRELIABLE]
+    questioned = [f.message for f in r.findings if f.severity == Severity.UNRELIABLE and isinstance(f, QUESTIONED)]
     return PointRecord(id=point_id, index=list(index), values=values, params=dict(r.params),
                        error=r.metrics.relative_rmse, noise_floor=r.metrics.noise_floor, verdict=r.verdict,
                        reason="" if r.reliable else r.reason, findings=kinds, used=not questioned,
-                       left_out="; ".join(questioned), renders=r.renders, seconds=r.seconds, key=r.key)
+                       left_out="; ".join(questioned), left_out_as=LeftOut.QUESTIONED if questioned else None,
+                       renders=r.renders, seconds=r.seconds, key=r.key)
 
 
 def fitted_names(p: Plan, points: list[PointRecord], done: list[Done]) -> list[str]:

@@ -10,12 +10,15 @@ from pathlib import Path
 import numpy as np
 
 from ..data.errors import ConfigError
+from ..data.findings import FindingKind
+from ..data.settings import Scheme
 from ..host.plugins import AdapterRegistry
 from ..run.runner import Runner
 from .plan import Plan, point_task, record
-from .table import Candidate, PointRecord, Table, TableMap, grid_of
+from .table import Candidate, LeftOut, PointRecord, Table, TableMap, grid_of
+from .outputs import OutputKind
 
-REMEDIES: dict[str, dict] = {"not_at_minimum": {"scheme": "three"}}
+REMEDIES: dict[FindingKind, dict] = {FindingKind.NOT_AT_MINIMUM: {"scheme": Scheme.THREE}}
 """The refit a grid point's finding names as its remedy (the fit's own advice to a user: a fit that
 stopped short of a minimum of the full image is fitted again by scheme three, every parameter on
 the full image). The refit replaces the first fit where it ends lower."""
@@ -175,7 +178,7 @@ def leave_out_cliffs(draft: Table) -> list[PointRecord]:
 
     worst: dict[int, tuple[float, str]] = {}
     for o in draft.outputs:
-        if o.kind == "error":
+        if o.kind == OutputKind.ERROR:
             continue
         grid = grid_of(draft, o)
         try:
@@ -193,7 +196,7 @@ def leave_out_cliffs(draft: Table) -> list[PointRecord]:
     chosen = sorted(worst.items(), key=lambda kv: -kv[1][0])[:cap]
     points = list(draft.points)
     for i, (miss, label) in chosen:
-        points[i] = points[i].model_copy(update={"used": False, "left_out": (
+        points[i] = points[i].model_copy(update={"used": False, "left_out_as": LeftOut.CLIFF, "left_out": (
             f"a cliff: its {label} is {miss:.0%} of the range off a smooth map of its neighbours' (its fit found "
             "another optimum)")})
     return points

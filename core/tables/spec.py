@@ -14,6 +14,7 @@ import itertools
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from enum import StrEnum
 from typing import Any, Literal
 
 import numpy as np
@@ -21,12 +22,20 @@ from pydantic import Field, model_validator
 
 from ..data.configio import load_yaml_model
 from ..data.model import Strict
+from ..data.schemas import ParamKind, Scale
 from ..data.settings import Settings
 from ..experiments.spec import SceneSpec, SourceSide
 from ..job.job import Target
 
 MAX_POINTS = 20_000
 CHANNELS = "rgb"
+
+
+class AxisMode(StrEnum):
+    """How an RGB axis is sampled: as grey levels (the separable form), or each channel an axis."""
+
+    SCALE = "scale"
+    CHANNELS = "channels"
 
 
 class Axis(Strict):
@@ -40,10 +49,10 @@ class Axis(Strict):
                                                    "(a dark colour, where a target's fits turn from one optimum to "
                                                    "another). Between two of them the map interpolates evenly in the "
                                                    "value, or in its logarithm with scale: log.")
-    scale: Literal["linear", "log"] = Field("linear", description="Spacing of the values: even, or even in the "
+    scale: Scale = Field(Scale.LINEAR, description="Spacing of the values: even, or even in the "
                                                                    "logarithm (roughness: most change is near 0).")
-    mode: Literal["scale", "channels"] = Field(
-        "scale", description="RGB parameters only. scale: sampled as grey levels, the map applied to each channel "
+    mode: AxisMode = Field(
+        AxisMode.SCALE, description="RGB parameters only. scale: sampled as grey levels, the map applied to each channel "
                              "alone (the separable form; needs a separable parameter); channels: each channel an "
                              "axis of its own (a full regression over the colour cube, n³ points).")
 
@@ -52,7 +61,7 @@ class Axis(Strict):
         lo, hi = self.range
         if not (math.isfinite(lo) and math.isfinite(hi)) or not lo < hi:
             raise ValueError("range must be two finite numbers, the lower first")
-        if self.scale == "log" and lo <= 0:
+        if self.scale == Scale.LOG and lo <= 0:
             raise ValueError("a log axis needs a range above 0")
         if self.steps is None and self.values is None:
             raise ValueError("give steps (values evenly spaced over the range) or values (listed)")
@@ -79,7 +88,7 @@ class Axis(Strict):
         if self.values is not None:
             return [float(v) for v in self.values]
         lo, hi = self.range
-        if self.scale == "log":
+        if self.scale == Scale.LOG:
             return [float(v) for v in np.geomspace(lo, hi, self.count)]
         return [float(v) for v in np.linspace(lo, hi, self.count)]
 
@@ -88,7 +97,7 @@ class Axis(Strict):
         in the value or in its logarithm (outside the range: beyond). The maps' coordinate."""
         lo, hi = self.range
         v = np.asarray(v, dtype=dtype)
-        if self.scale == "log":
+        if self.scale == Scale.LOG:
             tiny = np.finfo(dtype).tiny
             return (np.log(np.maximum(v, dtype(tiny))) - dtype(math.log(lo))) * dtype(1.0 / (math.log(hi) -
                                                                                              math.log(lo)))
@@ -102,7 +111,7 @@ class Axis(Strict):
         """The value at ``t`` in [0, 1] of the range, evenly spaced as `scale` says (random draws)."""
         lo, hi = self.range
         t = np.asarray(t, dtype=np.float64)
-        if self.scale == "log":
+        if self.scale == Scale.LOG:
             return np.exp(math.log(lo) + t * (math.log(hi) - math.log(lo)))
         return lo + t * (hi - lo)
 
@@ -155,13 +164,13 @@ class TableSpec(Strict):
         if len(set(self.follow)) < len(self.follow):
             raise ValueError(f"follow: {', '.join(self.follow)}: an axis named twice (each is followed once)")
         for name in self.follow:
-            if name not in self.axes or self.axes[name].mode == "channels":
+            if name not in self.axes or self.axes[name].mode == AxisMode.CHANNELS:
                 raise ValueError(f"follow: {name!r} is not a scalar or grey axis of the grid (axes: "
-                                 f"{', '.join(a for a, ax in self.axes.items() if ax.mode != 'channels')})")
+                                 f"{', '.join(a for a, ax in self.axes.items() if ax.mode != AxisMode.CHANNELS)})")
         shared = sorted(set(self.axes) & set(self.source.params))
         if shared:
             raise ValueError(f"axes.{shared[0]}: also given in source.params: an axis's values come from the grid")
-        n = math.prod(a.count ** 3 if a.mode == "channels" else a.count for a in self.axes.values())
+        n = math.prod(a.count ** 3 if a.mode == AxisMode.CHANNELS else a.count for a in self.axes.values())
         if n > MAX_POINTS:
             raise ValueError(f"axes: {n} points, at most {MAX_POINTS} in one table")
         return self
@@ -196,7 +205,7 @@ class Layout:
     def dims(self) -> list[Dim]:
         out = []
         for name, ax in self.axes.items():
-            if self.kinds[name] == "rgb" and ax.mode == "channels":
+            if self.kinds[name] == ParamKind.RGB and ax.mode == AxisMode.CHANNELS:
                 out += [Dim(name, c) for c in range(3)]
             else:
                 out.append(Dim(name, None))
@@ -205,7 +214,7 @@ class Layout:
     @property
     def separable(self) -> bool:
         """Every RGB axis is a grey `scale`: an RGB target parameter is mapped channel by channel."""
-        return not any(self.kinds[n] == "rgb" and a.mode == "channels" for n, a in self.axes.items())
+        return not any(self.kinds[n] == ParamKind.RGB and a.mode == AxisMode.CHANNELS for n, a in self.axes.items())
 
     def grid(self) -> list[tuple[tuple[int, ...], dict[str, Any]]]:
         """Every grid point: its index along each dimension, and its axis values (RGB as triples)."""
@@ -219,7 +228,7 @@ class Layout:
                 if d.channel is not None:
                     values.setdefault(d.axis, [0.0, 0.0, 0.0])[d.channel] = v
                 else:
-                    values[d.axis] = [v, v, v] if self.kinds[d.axis] == "rgb" else v
+                    values[d.axis] = [v, v, v] if self.kinds[d.axis] == ParamKind.RGB else v
             out.append((idx, values))
         return out
 
@@ -230,7 +239,7 @@ class Layout:
 
         cols: list[tuple[str, int | None]] = []
         for name in self.axes:
-            cols += [(name, c) for c in range(3)] if self.kinds[name] == "rgb" else [(name, None)]
+            cols += [(name, c) for c in range(3)] if self.kinds[name] == ParamKind.RGB else [(name, None)]
         if n == 0:
             return []
         unit = qmc.Sobol(len(cols), scramble=True, seed=seed).random(1 << max(0, (n - 1).bit_length()))[:n]
@@ -249,7 +258,7 @@ class Layout:
     @property
     def grey_axes(self) -> list[str]:
         """The RGB axes sampled as grey levels (`mode: scale`)."""
-        return [n for n, a in self.axes.items() if self.kinds[n] == "rgb" and a.mode == "scale"]
+        return [n for n, a in self.axes.items() if self.kinds[n] == ParamKind.RGB and a.mode == AxisMode.SCALE]
 
     def channel_weights(self, values: dict[str, np.ndarray], dtype=np.float64) -> np.ndarray | None:
         """N x 3: how much each channel counts in an output the channels share (a scalar target
@@ -280,7 +289,7 @@ class Layout:
         cols = []
         for d in self.dims:
             v = np.asarray(values[d.axis])
-            if self.kinds[d.axis] == "rgb":
+            if self.kinds[d.axis] == ParamKind.RGB:
                 v = v[..., d.channel] if d.channel is not None else (
                     v.mean(axis=-1) if channel is None else v[..., channel])
             cols.append(np.ascontiguousarray(self.axes[d.axis].to_unit(v, dtype)))

@@ -9,12 +9,13 @@ import hashlib
 import json
 from enum import StrEnum
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 from pydantic import Field, computed_field
 
 from ..data.errors import ConfigError
+from ..data.findings import FindingKind
 from ..data.model import Strict, WithDerived
 from ..data.scene import ProbeScene
 from ..data.versioned import JsonFormat, check_version, parse, read_json
@@ -22,16 +23,18 @@ from .colours import Polynomial, Rows, correction_columns, corrected, gaps
 from .maps import Grid, Regressor, build
 from .outputs import ERROR, Output, assemble, target_value
 from .spec import Layout, TableSpec
+from ..data.schemas import ParamKind
 
-TABLE_SCHEMA_VERSION = 6
+TABLE_SCHEMA_VERSION = 7
 """2: an output the channels share is looked up at each channel's grey level and weighted (was: at the
 mean grey level); a table of 1 is built again into its folder, which reuses its fits. 3: coloured
 points and maps corrected by them (`colours`); a table of 2 has neither and is read as it is. 4: path
 following along axes of the grid (`spec.follow`); tables of 2 and 3 have none and are read as they are.
 5: an axis's values may be listed (`values`, closer together where the map bends); earlier tables have
 evenly spaced ones and are read as they are. 6: the build record counts its cliffs
-(`BuildRecord.cliffs`); a table of 5 has none and is read as it is."""
-READS = (2, 3, 4, 5, 6)
+(`BuildRecord.cliffs`); a table of 5 has none and is read as it is. 7: a point left out says why as a
+type (`PointRecord.left_out_as`) beside its sentence; earlier tables have the sentence alone."""
+READS = (2, 3, 4, 5, 6, 7)
 
 
 class PointVerdict(StrEnum):
@@ -49,6 +52,23 @@ class PointVerdict(StrEnum):
         return self in (PointVerdict.UNRELIABLE, PointVerdict.FAILED)
 
 
+class Channels(StrEnum):
+    """How a map reads a colour for an output the channels share: each channel's grey level,
+    weighted; or the mean grey level."""
+
+    WEIGHTED = "weighted"
+    MEAN = "mean"
+
+
+class LeftOut(StrEnum):
+    """Why a point is left out of the regression: its fit failed, a finding questions the fit
+    itself (`plan.QUESTIONED`), or it is a cliff (`refits.leave_out_cliffs`)."""
+
+    FAILED = "failed"
+    QUESTIONED = "questioned"
+    CLIFF = "cliff"
+
+
 class PointRecord(Strict):
     """One fit of the table: a grid point or a held-out material."""
 
@@ -60,9 +80,13 @@ class PointRecord(Strict):
     noise_floor: float | None = None
     verdict: PointVerdict = Field(description="ok, mismatch, unchecked, unreliable, or failed.")
     reason: str = Field("", description="The verdict's findings in words (or the failure).")
-    findings: list[str] = Field(default_factory=list, description="The kinds of the findings of severity unreliable.")
+    findings: list[FindingKind] = Field(default_factory=list, description="The kinds of the findings of severity "
+                                                                         "unreliable (the findings themselves are "
+                                                                         "in the fit's result.json).")
     used: bool = Field(description="Whether the map was fitted to it.")
-    left_out: str = Field("", description="Why it was left out of the regression.")
+    left_out: str = Field("", description="Why it was left out of the regression, in words.")
+    left_out_as: LeftOut | None = Field(None, description="Why it was left out, as a type (None: used; or a table "
+                                                          "of format 6 or earlier, which says it in words alone).")
     renders: int = 0
     seconds: float = 0.0
     key: str = ""
@@ -77,8 +101,8 @@ class Candidate(Strict):
     """One kind of map, fitted to the used grid points, and how it did."""
 
     method: str
-    channels: Literal["weighted", "mean"] = Field(
-        "weighted", description="How an output the channels share (a scalar target parameter under a grey `scale` "
+    channels: Channels = Field(
+        Channels.WEIGHTED, description="How an output the channels share (a scalar target parameter under a grey `scale` "
                                 "axis) reads the source's colour: looked up at each channel's grey level and weighted "
                                 "by the channel's value squared, or looked up at the mean grey level.")
     problem: str = Field("", description="Why this map cannot be fitted to the grid's used points ('': it can).")
@@ -150,7 +174,7 @@ class Table(WithDerived):
     def digest(self) -> str:
         """SHA-256 of what determines the map (all but the build's account of time and place): the
         same table rebuilt gives the same digest, and lookups stored with it stay valid."""
-        timing = {"seconds", "renders"}
+        timing = {"seconds", "renders", "left_out_as"}  # left_out_as restates `used` and `left_out`
         doc = self.model_dump(mode="json", exclude={"digest": True, "build": True, "tool": True,
                                                     "points": {"__all__": timing}, "holdout": {"__all__": timing},
                                                     "colours": {"__all__": timing}})
@@ -193,7 +217,7 @@ class TableMap:
         """``method``: a key of the table's candidates (its chosen map by default)."""
         self.table, self.method = table, method or table.chosen
         c = table.candidates[self.method]
-        self.weighted = c.channels == "weighted"
+        self.weighted = c.channels == Channels.WEIGHTED
         self.regressors: dict[str, Regressor] = {o.label: build(c.method, grid_of(table, o), c.hyper.get(o.label))
                                                  for o in table.outputs}
         self.corrections: dict[str, Polynomial] = {}
@@ -229,7 +253,7 @@ class TableMap:
     def _arrays(self, values: dict[str, Any]) -> dict[str, np.ndarray]:
         layout = self.table.layout
         arr = {k: np.asarray(values[k], np.float64) for k in self.table.spec.axes}
-        return {k: (v.reshape(-1, 3) if layout.kinds[k] == "rgb" else v.reshape(-1)) for k, v in arr.items()}
+        return {k: (v.reshape(-1, 3) if layout.kinds[k] == ParamKind.RGB else v.reshape(-1)) for k, v in arr.items()}
 
     def _assemble(self, arr: dict[str, np.ndarray], correct, finished: bool) -> dict[str, np.ndarray]:
         layout = self.table.layout

@@ -10,7 +10,7 @@ import yaml
 
 from brdfremap.core.data.errors import ConfigError
 from brdfremap.core.host.plugins import collect_adapters
-from brdfremap.core.data.schemas import Material
+from brdfremap.core.data.schemas import Material, Scale
 from brdfremap.core.tables import Layout, TableMap, load_table_spec, read_table
 from brdfremap.core.tables.build import choose, plan
 from brdfremap.core.tables.lookup import axis_values, look_up
@@ -401,7 +401,7 @@ def test_each_output_takes_the_scale_that_predicts_it_better(tmp_path):
     from brdfremap.core.tables.table import grid_of
 
     table = synthetic_table(tmp_path)  # Ward's alpha = 1.1 x the source's, over a log axis: linear in the log
-    linear = [o.model_copy(update={"scale": "linear"}) if o.param == "alpha" else o for o in table.outputs]
+    linear = [o.model_copy(update={"scale": Scale.LINEAR}) if o.param == "alpha" else o for o in table.outputs]
     table = table.model_copy(update={"outputs": linear})
     chosen = {o.param: o.scale for o in choose_scales(table.outputs, lambda o: grid_of(table, o))}
     assert chosen["alpha"] == "log" and chosen["error"] == "log"
