@@ -22,10 +22,9 @@ from ..data.textures import Texture
 from ..host.plugins import AdapterRegistry
 from ..job.execute import IMAGES, AdapterPool
 from ..job.job import Job, Target, Where, resolve
-from ..job.report import read_report
 from ..run.executors import Workers
 from ..run.runner import Done, Runner, Task
-from ..run.store import RESULT, Store, owned
+from ..run.store import Store, owned
 from ..tables import Table, TableMap
 from ..tables.lookup import Answer
 from .formats import Converted, Entry, Formats
@@ -240,8 +239,9 @@ def _converted(item: Item, folder: Path) -> Converted:
     """A converted material for the writers; a textured one's maps copied to `textures/<slot>/`."""
     report = item.done.report
     here = folder / "materials" / item.slot
+    files = tuple(f.name for f in report.files)
     if report.textures is None:
-        return Converted(item.entry.name, item.model, dict(report.params), here)
+        return Converted(item.entry.name, item.model, dict(report.params), here, files=files)
     maps = {}
     for m in report.textures.maps:
         rel = Path("textures") / item.slot / m.file
@@ -252,7 +252,7 @@ def _converted(item: Item, folder: Path) -> Converted:
             raise ConfigError(f"cannot copy the map: {exc.strerror or exc}", file=str(folder / rel)) from None
         filt = next(iter(item.entry.material.textures.values())).filter
         maps[m.param] = Texture(file=rel.as_posix(), colorspace=m.colorspace, filter=filt)  # type: ignore[arg-type]
-    return Converted(item.entry.name, item.model, dict(report.textures.values), here, maps)
+    return Converted(item.entry.name, item.model, dict(report.textures.values), here, maps, files)
 
 
 def _write_libraries(result: Conversion, folder: Path, formats: Formats) -> None:
@@ -289,8 +289,7 @@ class NativeFiles:
         """The folder `native/` (one library: a folder per material), when any material has one."""
         out = []
         for item in items:
-            report = read_report(item.folder / RESULT)
-            natives = [f.name for f in report.files if f.name not in IMAGES and Path(f.name).name == f.name]
+            natives = [name for name in item.files if name not in IMAGES and Path(name).name == name]
             dest = folder / "native" / item.folder.name  # the material's slot: its name, made safe and unique
             try:
                 dest.mkdir(parents=True, exist_ok=True)

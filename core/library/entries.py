@@ -54,3 +54,5 @@ class Converted:
     """The job's result folder (its own native files are there)."""
     textures: dict[str, Texture] = field(default_factory=dict)
     """Parameters read from maps: each `file` relative to the library's folder (`textures/...`)."""
+    files: tuple[str, ...] = ()
+    """The names of the files the job wrote beside its result (its report's `files`)."""
