@@ -4,8 +4,10 @@
 #                 ones texel by texel through the remap tables shipped in configs/tables/built/
 #   make test   - the test suite
 # Both create .venv and install what they need; `system-deps` adds libLLVM 19 so Mitsuba
-# can use its fast llvm_ad_rgb variant (without it the tool falls back to scalar_rgb), and
-# Debian's Chromium, in which the tests open the HTML report.
+# can use its fast llvm_ad_rgb variant (without it the tool falls back to scalar_rgb),
+# Debian's Chromium (the tests open the HTML report in it; the threejs adapter renders in it),
+# and Node.js with npm, which installs three.js and the Khronos glTF validator, pinned by
+# adapters/threejs/web/package-lock.json, into adapters/threejs/web/node_modules.
 
 PYTHON ?= python3.11
 VENV   ?= .venv
@@ -22,27 +24,34 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e '.[all]'
 	@touch $(STAMP)
 
-APT_NEEDS := $(if $(wildcard $(LLVM19)),,libllvm19) $(if $(wildcard /usr/bin/chromium),,chromium)
+APT_NEEDS := $(if $(wildcard $(LLVM19)),,libllvm19) $(if $(wildcard /usr/bin/chromium),,chromium) \
+             $(if $(wildcard /usr/bin/node),,nodejs) $(if $(wildcard /usr/bin/npm),,npm)
+WEB    := adapters/threejs/web
+THREE  := $(WEB)/node_modules/.package-lock.json
 
 system-deps:
 	@if [ "$$(uname -s)" = Linux ] && [ -n "$(strip $(APT_NEEDS))" ] && command -v apt-get >/dev/null; then \
 	  if [ "$$(id -u)" = 0 ]; then SUDO=; else SUDO=sudo; fi; \
-	  echo "installing $(strip $(APT_NEEDS)) (Mitsuba's llvm variant; the browser the report is tested in)"; \
+	  echo "installing $(strip $(APT_NEEDS)) (Mitsuba's llvm variant; the browser the report is tested in and three.js renders in; Node.js and npm for three.js)"; \
 	  $$SUDO apt-get update -qq && $$SUDO apt-get install -y -qq $(APT_NEEDS) >/dev/null; \
 	fi
 
+$(THREE): $(WEB)/package-lock.json
+	cd $(WEB) && npm ci --no-audit --no-fund --loglevel=error
+	@touch $(THREE)
+
 TABLES := configs/tables/built
 
-demo: system-deps $(STAMP)
+demo: system-deps $(STAMP) $(THREE)
 	$(VENV)/bin/remap convert examples/library/scene.xml --to cycles --out out/library \
 	  --table $(TABLES)/mitsuba-roughconductor-to-cycles-principled.json \
 	  --table $(TABLES)/mitsuba-roughconductor-to-cycles-metallic.json \
 	  --table $(TABLES)/mitsuba-roughplastic-to-cycles-principled.json
 
-test: system-deps $(STAMP)
+test: system-deps $(STAMP) $(THREE)
 	$(PY) -m pytest
 
-test-all: system-deps $(STAMP)
+test-all: system-deps $(STAMP) $(THREE)
 	$(PY) -m pytest --run-slow
 
 clean:

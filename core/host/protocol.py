@@ -50,6 +50,11 @@ class Adapter(abc.ABC):
     """Clear glasses of IOR 1.5 (model, params) by kind: "smooth" (perfectly smooth), "rough" (GGX,
     α 0.1). An adapter that declares them renders light through a sphere (`ModelSpec.transmits`);
     `remap check` and the verdict compare them with another adapter's."""
+    transmission_limit: ClassVar[str] = ""
+    """What keeps this renderer's light through a sphere from being a path tracer's, where it is a
+    property of the renderer rather than a fault to fix (a real-time renderer's screen-space
+    transmission): `remap check` says it where the glass check fails, instead of advice for a path
+    tracer. Empty: none."""
     metals: ClassVar[dict[str, tuple[str, dict]]] = {}
     """Aluminium (η 1.66, 0.88, 0.52; k 9.22, 6.27, 4.84) by kind: "smooth" (GGX, α 0.01), "rough"
     (GGX, α 0.09). A metal's held-out error is judged beyond how far two adapters' metals of its

@@ -1,0 +1,146 @@
+"""The three.js adapter: a real-time renderer, driven as a black box. Every render is three.js
+itself (pinned from npm, `web/package.json`) in Debian's headless Chromium: the material is a glTF
+material read by three.js's GLTFLoader (as an app reads one), point lights are three.js's physical
+point lights (candela: W/sr here), an environment goes through three.js's own PMREM, and the
+pixels are read back linear from a float render target. Supersampled `SUPERSAMPLE`² per pixel
+(a box filter), as a path tracer's pixel integrates its footprint; deterministic, so its own noise
+is nil."""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from brdfremap.core.data.appearance import Appearance, Kind, conductor_f0
+from brdfremap.core.data.atomic import write_text_atomic
+from brdfremap.core.data.environment import radiance
+from brdfremap.core.data.scene import EnvironmentLight, PointLight, ProbeScene
+from brdfremap.core.data.schemas import Value
+from brdfremap.core.host.protocol import Adapter, ModelChoice, check_image
+
+from . import appearance as _appearance
+from . import gltf
+from .browser import THREE, WEB, Page, chromium
+from .library import sphere_document
+from .models import MODELS
+
+SUPERSAMPLE = 8
+"""Samples per pixel along each axis (a box filter, as the path tracers' pixels are): a sphere's edge
+is covered to 1/64 of a pixel. At 4 the white Lambertian under the rim light (a crescent at the edge)
+was 5.4 % from Mitsuba's at 1024 spp, at 8 1.9 %, at 12 1.2 %, at 1.6x and 3.1x the render time of 8
+(bench: the module docstring of bench/threejs_cost.py)."""
+ALUMINIUM = conductor_f0((1.66, 0.88, 0.52), (9.22, 6.27, 4.84))
+
+
+def three_version() -> str | None:
+    try:
+        return json.loads(THREE.read_text())["version"]
+    except (OSError, ValueError, KeyError):
+        return None
+
+
+def environment_rows(px: np.ndarray) -> np.ndarray:
+    """A map in the project's convention (`core.data.environment`: row 0 straight up, u = atan2(x, -z)
+    / 2π) as three.js samples an equirectangular texture (u = atan2(z, x) / 2π + 1/2, v = asin(y) / π
+    + 1/2, the first row at v = 0): rows bottom first, turned a quarter of the way round."""
+    return np.ascontiguousarray(np.roll(px[::-1], px.shape[1] // 4, axis=1), dtype=np.float32)
+
+
+class ThreeJsAdapter(Adapter):
+    name = "threejs"
+    summary = "three.js (WebGL 2) in headless Chromium: a real-time renderer, glTF materials"
+    install_hint = ("apt-get install chromium nodejs npm, then `npm ci` in adapters/threejs/web "
+                    "(make deps does both)")
+    models = MODELS
+    light_types = frozenset({"point", "environment"})
+    version = "1"
+    calibration = ("gltf_pbr", {"base_color": 0.8, "metallic": 0.0, "roughness": 1.0, "specular": 0.0})
+    transmission_limit = ("three.js's transmission is screen-space, by design: a glass shows a blurred copy of what "
+                          "was rendered behind it (the black background), not the environment refracted through the "
+                          "sphere; no setting of it is light transport")
+    glasses = {kind: ("gltf_pbr", {"base_color": 1.0, "metallic": 0.0, "roughness": r, "ior": 1.5, "transmission": 1.0})
+               for kind, r in (("smooth", 0.0), ("rough", 0.1 ** 0.5))}
+    metals = {kind: ("gltf_pbr", {"base_color": ALUMINIUM, "metallic": 1.0, "roughness": r})
+              for kind, r in (("smooth", 0.1), ("rough", 0.3))}
+
+    @classmethod
+    def unavailable_reason(cls) -> str | None:
+        if chromium() is None:
+            return "Chromium is not installed (apt-get install chromium)"
+        if importlib.util.find_spec("playwright") is None:
+            return "the playwright package is not installed"
+        if three_version() is None:
+            return f"three.js is not installed in {WEB} (run `npm ci` there)"
+        return None
+
+    @classmethod
+    def identity(cls) -> str:
+        return f"{cls.version} three-{three_version()} ss{SUPERSAMPLE}"
+
+    @classmethod
+    def environment(cls) -> dict[str, Any]:
+        return {"renderer": f"three.js {three_version()} (WebGL 2, SwiftShader) in {chromium()}"}
+
+    def __init__(self) -> None:
+        self.page = Page()
+        self.renders = 0
+
+    def describe(self) -> dict[str, Any]:
+        return {"renderer": f"three.js r{self.page.info.get('three', '?')} in headless Chromium",
+                "gl": self.page.info.get("renderer", "?"), "startup_seconds": round(self.page.startup_seconds, 2)}
+
+    def render(self, model: str, params: dict[str, Value], scene: ProbeScene, lobe: str | None = None) -> np.ndarray:
+        if lobe is not None:
+            raise ValueError(f"threejs: model {model!r} has no lobes to render alone")
+        return self.render_document(gltf.document(params, MODELS[model]), scene)
+
+    def render_document(self, doc: dict[str, Any], scene: ProbeScene) -> np.ndarray:
+        """The first material of a glTF document, as three.js's GLTFLoader reads it, on the probe
+        sphere (every render goes this way: a `.gltf` this tool writes renders as its fit did)."""
+        views = [{"camera": self._camera(view.camera), "lights": [self._light(x) for x in view.lights]}
+                 for view in scene.all_views()]
+        request = {"resolution": scene.resolution, "supersample": SUPERSAMPLE,
+                   "sphere": {"center": list(scene.sphere.center), "radius": scene.sphere.radius},
+                   "views": views, "material": doc}
+        self.renders += 1
+        img = self.page.render(request, len(views))
+        return img if scene.views else check_image(img, scene, "threejs")
+
+    @staticmethod
+    def _camera(c) -> dict[str, Any]:
+        return {"position": list(c.position), "target": list(c.target), "up": list(c.up), "fov": c.fov,
+                "distance": c.distance}
+
+    def _light(self, light) -> dict[str, Any]:
+        if isinstance(light, PointLight):
+            return {"type": "point", "position": list(light.position), "intensity": light.intensity}
+        return {"type": "environment", "key": self._environment(light)}
+
+    def _environment(self, light: EnvironmentLight) -> str:
+        """The key of this environment in the page, handed over the first time."""
+        key = hashlib.sha256(json.dumps(light.key(), sort_keys=True).encode()).hexdigest()[:16]
+        self.page.environment(key, environment_rows(radiance(light.map, light.scale, light.rotation)))
+        return key
+
+    def appearance(self, model: str, params: dict[str, Value]) -> Appearance | None:
+        return _appearance.appearance(params)
+
+    def from_appearance(self, model: str, appearance: Appearance, base: dict[str, Value]) -> dict[str, Value]:
+        return _appearance.from_appearance(appearance, base)
+
+    def model_for(self, appearance: Appearance) -> ModelChoice:
+        kind = "a metal" if appearance.kind == Kind.CONDUCTOR else "a dielectric"
+        return ModelChoice("gltf_pbr", {}, f"{kind}: glTF's metallic-roughness, the one model three.js reads")
+
+    def write_native(self, model: str, params: dict[str, Value], out_dir: Path,
+                     textures=None) -> list[Path]:
+        doc = sphere_document([("brdf-remap", params)], MODELS[model])
+        return [write_text_atomic(Path(out_dir) / "material.gltf", json.dumps(doc, indent=1) + "\n")]
+
+    def close(self) -> None:
+        self.page.shutdown()

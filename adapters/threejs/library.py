@@ -1,0 +1,155 @@
+"""glTF files: a converted library written as `library.gltf` (every material under its source's
+name, each on a sphere of its own in a row, so any viewer shows them), and a reader of `.gltf` and
+`.glb` materials (through pygltflib) as `threejs:gltf_pbr` sources."""
+
+from __future__ import annotations
+
+import base64
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from brdfremap.core.data.atomic import write_text_atomic
+from brdfremap.core.data.errors import ConfigError
+from brdfremap.core.data.schemas import Material, ModelSpec, Value
+from brdfremap.core.library.entries import Converted, Entry
+
+from . import gltf
+from .models import MODELS
+
+RINGS, SEGMENTS = 64, 128
+SPACING = 2.5
+"""Spheres of radius 1, this far apart along +x."""
+
+
+def sphere_mesh(rings: int = RINGS, segments: int = SEGMENTS) -> dict[str, np.ndarray]:
+    """A UV sphere of radius 1: positions, normals, texture coordinates, tangents along the
+    latitudes (the probe's: anisotropy turns from them) and triangle indices, counter-clockwise
+    seen from outside."""
+    theta, phi = np.meshgrid(np.linspace(0.0, math.pi, rings + 1), np.linspace(0.0, 2.0 * math.pi, segments + 1),
+                             indexing="ij")
+    s, c = np.sin(theta), np.cos(theta)
+    pos = np.stack([-s * np.cos(phi), c, s * np.sin(phi)], axis=-1).reshape(-1, 3)
+    tangent = np.stack([np.sin(phi), np.zeros_like(phi), np.cos(phi)], axis=-1).reshape(-1, 3)  # d(pos)/d(phi)
+    uv = np.stack([phi / (2 * math.pi), theta / math.pi], axis=-1).reshape(-1, 2)
+    idx = []
+    for i in range(rings):
+        for j in range(segments):
+            a, b = i * (segments + 1) + j, (i + 1) * (segments + 1) + j
+            if i > 0:
+                idx += [a, b, a + 1]
+            if i < rings - 1:
+                idx += [a + 1, b, b + 1]
+    return {"POSITION": pos.astype(np.float32), "NORMAL": pos.astype(np.float32),
+            "TANGENT": np.concatenate([tangent, np.ones((pos.shape[0], 1))], axis=1).astype(np.float32),
+            "TEXCOORD_0": uv.astype(np.float32), "indices": np.asarray(idx, np.uint16)}
+
+
+def _mesh_parts(mesh: dict[str, np.ndarray]) -> tuple[bytes, list[dict], list[dict], dict[str, int], int]:
+    """The buffer's bytes, its views and accessors, each attribute's accessor, and the indices'."""
+    blob, views, accessors, attrs = b"", [], [], {}
+    kinds = {1: "SCALAR", 2: "VEC2", 3: "VEC3", 4: "VEC4"}
+    for name, arr in mesh.items():
+        data = arr.tobytes()
+        views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(data),
+                      "target": 34963 if name == "indices" else 34962})
+        acc: dict[str, Any] = {"bufferView": len(views) - 1, "componentType": 5123 if name == "indices" else 5126,
+                               "count": int(arr.shape[0]), "type": kinds[1 if arr.ndim == 1 else arr.shape[1]]}
+        if name == "POSITION":
+            acc.update(min=[float(x) for x in arr.min(axis=0)], max=[float(x) for x in arr.max(axis=0)])
+        accessors.append(acc)
+        attrs[name] = len(accessors) - 1
+        blob += data + b"\0" * (-len(data) % 4)
+    return blob, views, accessors, {k: v for k, v in attrs.items() if k != "indices"}, attrs["indices"]
+
+
+def sphere_document(materials: list[tuple[str, dict[str, Value]]], spec: ModelSpec) -> dict[str, Any]:
+    """A glTF document: each material (name, complete parameters) on a unit sphere of its own."""
+    mats = [gltf.material(name, spec.complete(params), spec) for name, params in materials]
+    turned = [bool(m.get("extensions", {}).get("KHR_materials_anisotropy")) for m in mats]
+    mesh = {k: v for k, v in sphere_mesh().items() if k != "TEXCOORD_0" and (k != "TANGENT" or any(turned))}
+    blob, views, accessors, attributes, indices = _mesh_parts(mesh)
+    plain = {k: v for k, v in attributes.items() if k != "TANGENT"}  # tangents only where anisotropy turns from them
+    doc: dict[str, Any] = {
+        "asset": {"version": "2.0", "generator": gltf.GENERATOR},
+        "scene": 0, "scenes": [{"nodes": list(range(len(mats)))}],
+        "nodes": [{"name": m["name"], "mesh": i, "translation": [SPACING * i, 0.0, 0.0]} for i, m in enumerate(mats)],
+        "meshes": [{"name": m["name"], "primitives": [{"attributes": attributes if turned[i] else plain,
+                                                       "indices": indices, "material": i}]}
+                   for i, m in enumerate(mats)],
+        "materials": mats, "accessors": accessors, "bufferViews": views,
+        "buffers": [{"byteLength": len(blob),
+                     "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}]}
+    used = gltf.extensions_used(mats)
+    if used:
+        doc["extensionsUsed"] = used
+    return doc
+
+
+def material_document(doc: dict[str, Any], index: int) -> dict[str, Any]:
+    """One material of a glTF document, alone in a document of its own (as the adapter renders one)."""
+    mat = dict(doc["materials"][index])
+    out: dict[str, Any] = {"asset": {"version": "2.0"}, "materials": [mat]}
+    used = sorted(mat.get("extensions", {}))
+    if used:
+        out["extensionsUsed"] = used
+    return out
+
+
+class GltfLibraryWriter:
+    name = "glTF 2.0 library (library.gltf)"
+    adapter = "threejs"
+    models: tuple[str, ...] = ()
+
+    def write(self, folder: Path, items: list[Converted]) -> list[Path]:
+        spec = MODELS["gltf_pbr"]
+        doc = sphere_document([(i.name, i.params) for i in items], spec)
+        return [write_text_atomic(Path(folder) / "library.gltf", json.dumps(doc, indent=1) + "\n")]
+
+
+def read_document(path: Path) -> dict[str, Any]:
+    """A .gltf or .glb file's JSON (pygltflib reads both)."""
+    from pygltflib import GLTF2
+
+    try:
+        g = GLTF2.load(str(path))
+    except Exception as exc:  # pygltflib raises what its parser meets: JSON, struct and key errors alike
+        raise ConfigError(f"cannot read it as glTF: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}",
+                          file=str(path)) from None
+    if g is None:
+        raise ConfigError("cannot read it as glTF (not a .gltf or .glb file)", file=str(path))
+    return json.loads(g.to_json())
+
+
+class GltfReader:
+    name = "glTF 2.0 (.gltf, .glb)"
+    suffixes = (".gltf", ".glb")
+
+    def accepts(self, path: Path) -> bool:
+        return True
+
+    def read(self, path: Path) -> list[Entry]:
+        doc = read_document(path)
+        version = str((doc.get("asset") or {}).get("version", ""))
+        if version.split(".")[0] != "2":
+            raise ConfigError(f"is glTF {version or 'of no version'}: this reads glTF 2.0", file=str(path),
+                              field="asset.version")
+        return [self._entry(m, i, str(path)) for i, m in enumerate(doc.get("materials") or [])]
+
+    @staticmethod
+    def _entry(m: dict[str, Any], i: int, file: str) -> Entry:
+        name = m.get("name") or f"material {i}"
+        params, notes, textured = gltf.read_material(m)
+        spec = MODELS["gltf_pbr"]
+        clipped = {k: spec.param(k).clip(tuple(v) if isinstance(v, (list, tuple)) else v) for k, v in params.items()}
+        notes += [f"{k} {_shown(params[k])} is outside the model's bounds: read as {_shown(v)}"
+                  for k, v in clipped.items() if _shown(v) != _shown(params[k])]
+        return Entry(name=name, file=file, notes=notes, textured=textured,
+                     material=Material(adapter="threejs", model="gltf_pbr", name=name, params=clipped))
+
+
+def _shown(v: Value) -> str:
+    return ", ".join(f"{float(x):.4g}" for x in (v if isinstance(v, (list, tuple)) else [v]))

@@ -1,0 +1,199 @@
+"""The three.js adapter with real three.js in Debian's headless Chromium: the conventions
+(`remap check`), a white Lambertian against the analytic radiance and Mitsuba and Cycles under each
+light type, a crash, glTF written (the Khronos validator, three.js's GLTFLoader, Blender's importer)
+and glTF read."""
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from brdfremap.adapters.threejs.adapter import ThreeJsAdapter
+from brdfremap.adapters.threejs.library import GltfReader, material_document, sphere_document
+from brdfremap.core.data.errors import RenderError
+from brdfremap.core.data.metrics import relative_rmse
+from brdfremap.core.data.scene import EnvironmentLight, PointLight, ProbeScene
+from brdfremap.core.host import check
+from brdfremap.core.testing import analytic_lambert, sphere_hits
+from conftest import ROOT, need_adapter
+from helpers import remap
+
+VALIDATOR = os.path.join(os.path.dirname(sys.modules["brdfremap.adapters.threejs.adapter"].__file__), "web",
+                         "validate.mjs")
+
+
+@pytest.fixture(scope="module")
+def three():
+    need_adapter(ThreeJsAdapter)
+    adapter = ThreeJsAdapter()
+    yield adapter
+    adapter.close()
+
+
+def validate(path) -> dict:
+    if shutil.which("node") is None:
+        if os.environ.get("CI"):
+            pytest.fail("Node.js must be installed in CI (make system-deps installs it)")
+        pytest.skip("Node.js is not installed")
+    out = subprocess.run(["node", VALIDATOR, str(path)], capture_output=True, text=True, timeout=120, check=True)
+    return json.loads(out.stdout)["issues"]
+
+
+def _white(adapter):
+    model, given = adapter.calibration
+    return model, adapter.models[model].complete(given)
+
+
+def test_remap_check_passes_the_six_conventions_and_says_why_a_glass_cannot(three):
+    model, glass = three.glasses["smooth"]
+    rows = check.run(three.render, three.models, _white(three), (model, three.models[model].complete(glass)),
+                     environment=True, transmission_limit=three.transmission_limit)
+    by = {r.name.split(":")[0]: r for r in rows}
+    assert all(by[n].passed for n in ("images", "units", "orientation", "determinism", "lobes", "precision")), rows
+    assert "0." in by["units"].detail  # a fraction of a percent from the analytic radiance
+    glass = by["transmission"]
+    assert glass.passed is False and glass.by_design and "screen-space" in glass.fix
+
+
+@pytest.mark.parametrize("light, res, to_analytic", [
+    (PointLight(), 128, 0.002),  # the probe light
+    (PointLight(theta=120.0), 128, 0.04),  # the rim: 3.3 % at the terminator, as Mitsuba and Cycles are
+    (EnvironmentLight(type="environment", map="constant", scale=0.35), 64, 0.002),
+    (EnvironmentLight(type="environment", map="studio"), 64, 0.01),  # asymmetric: pins the orientation
+])
+def test_a_white_lambertian_under_each_light_type(three, mitsuba_adapter, light, res, to_analytic):
+    scene = ProbeScene(lights=[light], resolution=res, spp=256)
+    img = three.render(*_white(three), scene)
+    inner = sphere_hits(scene).interior
+    ref = analytic_lambert(scene, 0.8)[inner]
+    assert relative_rmse(ref, img[inner]) < to_analytic
+    mi = mitsuba_adapter.render("diffuse", mitsuba_adapter.models["diffuse"].complete({"reflectance": 0.8}), scene)
+    assert relative_rmse(mi[inner], img[inner]) < 0.02
+    assert img[0, 0].max() == 0  # the environment is not seen behind the sphere
+
+
+def test_a_crashed_browser_is_a_render_error_with_its_console_and_the_next_render_starts_another(three):
+    scene = ProbeScene(resolution=32)
+    first = three.render(*_white(three), scene)
+    page = three.page
+
+    def crash():
+        page._page.evaluate("() => { console.error('about to fail'); }")
+        page._page.close()  # the tab is gone, as after a renderer crash
+
+    page._in_thread(crash)
+    with pytest.raises(RenderError, match="threejs: the render failed") as err:
+        three.render(*_white(three), scene)
+    assert "about to fail" in str(err.value)
+    assert np.array_equal(three.render(*_white(three), scene), first)  # a fresh browser, the same image
+
+
+MATERIALS = [
+    ("gold", {"base_color": (1.0, 0.78, 0.34), "metallic": 1.0, "roughness": 0.3}),
+    ("red paint", {"base_color": (0.6, 0.05, 0.03), "metallic": 0.0, "roughness": 0.5, "clearcoat": 1.0,
+                   "clearcoat_roughness": 0.05, "ior": 1.45}),
+    ("velvet", {"base_color": (0.2, 0.0, 0.3), "metallic": 0.0, "roughness": 0.8, "sheen_color": (0.8, 0.5, 0.9),
+                "sheen_roughness": 0.4}),
+    ("brushed", {"base_color": (0.9, 0.9, 0.9), "metallic": 1.0, "roughness": 0.4, "anisotropy": 0.6,
+                 "anisotropy_rotation": 0.25}),
+]
+
+
+def test_a_written_gltf_validates_and_renders_in_three_js_as_it_was_fitted(three, tmp_path):
+    spec = three.models["gltf_pbr"]
+    doc = sphere_document(MATERIALS, spec)
+    path = tmp_path / "library.gltf"
+    path.write_text(json.dumps(doc))
+    issues = validate(path)
+    assert issues["numErrors"] == 0 and issues["numWarnings"] == 0, issues["messages"]
+    assert sorted(doc["extensionsUsed"]) == ["KHR_materials_anisotropy", "KHR_materials_clearcoat",
+                                             "KHR_materials_ior", "KHR_materials_sheen"]
+    assert "extensions" not in doc["materials"][0]  # the gold needs none
+    scene = ProbeScene(resolution=48)
+    for i, (name, params) in enumerate(MATERIALS):
+        direct = three.render("gltf_pbr", spec.complete(params), scene)
+        loaded = three.render_document(material_document(json.loads(path.read_text()), i), scene)
+        assert np.array_equal(direct, loaded), name
+    entries = GltfReader().read(path)  # and read back as sources, the same parameters
+    assert [e.name for e in entries] == [m for m, _ in MATERIALS]
+    for e, (_, params) in zip(entries, MATERIALS):
+        got = e.material.params
+        for k, v in params.items():
+            assert np.allclose(got[k], v, atol=1e-6), (e.name, k, got[k], v)
+
+
+def test_blender_imports_the_written_gltf(tmp_path, cycles_adapter):
+    spec = ThreeJsAdapter.models["gltf_pbr"]
+    path = tmp_path / "library.gltf"
+    path.write_text(json.dumps(sphere_document(MATERIALS, spec)))
+    code = ("import bpy, sys\n"
+            "bpy.ops.wm.read_factory_settings(use_empty=True)\n"
+            f"bpy.ops.import_scene.gltf(filepath={str(path)!r})\n"
+            "print('MATERIALS', sorted(m.name for m in bpy.data.materials if m.users))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert "MATERIALS ['brushed', 'gold', 'red paint', 'velvet']" in out.stdout
+
+
+def test_a_gltf_with_textures_and_unknown_extensions_is_read_with_notes(tmp_path):
+    doc = {"asset": {"version": "2.0"}, "extensionsUsed": ["KHR_materials_volume", "KHR_texture_transform"],
+           "textures": [{"source": 0}], "images": [{"uri": "brass.png"}],
+           "materials": [{"name": "brass", "pbrMetallicRoughness": {
+               "baseColorFactor": [0.9, 0.7, 0.3, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.35,
+               "baseColorTexture": {"index": 0}}, "extensions": {"KHR_materials_volume": {"thicknessFactor": 1}}},
+               {"pbrMetallicRoughness": {"roughnessFactor": 3.0}}]}
+    path = tmp_path / "m.gltf"
+    path.write_text(json.dumps(doc))
+    brass, second = GltfReader().read(path)
+    assert brass.material.params["base_color"] == (0.9, 0.7, 0.3) and brass.material.params["roughness"] == 0.35
+    assert brass.textured == ["base_color <- texture 0"]
+    assert any("KHR_materials_volume" in n for n in brass.notes)
+    assert second.name == "material 1" and second.material.params["roughness"] == 1.0
+    assert any("outside the model's bounds" in n for n in second.notes)
+
+
+SAMPLE = ROOT / "tests" / "data" / "gltf" / "MetalRoughSpheresNoTextures-materials.gltf"
+QUICK = ["--resolution", "48", "--spp", "16", "--quiet"]
+
+
+def test_a_library_converted_to_three_js_is_one_valid_gltf_of_its_fits(tmp_path, mitsuba_adapter, three):
+    lib = tmp_path / "lib"
+    lib.mkdir()
+    (lib / "gold.yaml").write_text("name: gold\nadapter: mitsuba\nmodel: roughconductor\n"
+                                   "params: {distribution: ggx, material: Au, alpha: 0.2}\n")
+    (lib / "plastic.yaml").write_text("name: red plastic\nadapter: mitsuba\nmodel: roughplastic\n"
+                                      "params: {distribution: ggx, alpha: 0.2, diffuse_reflectance: [0.5, 0.05, 0.04]}\n")
+    proc = remap("convert", lib, "--to", "threejs", "--out", tmp_path / "out", *QUICK, "--validate", "none")
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    path = tmp_path / "out" / "library.gltf"
+    issues = validate(path)
+    assert issues["numErrors"] == 0 and issues["numWarnings"] == 0, issues["messages"]
+    doc = json.loads(path.read_text())
+    by_name = {m["name"]: i for i, m in enumerate(doc["materials"])}
+    assert set(by_name) == {"gold", "red plastic"} and len(doc["nodes"]) == 2
+    summary = json.loads((tmp_path / "out" / "convert.json").read_text())
+    scene = ProbeScene(resolution=48)
+    for row in summary["materials"]:  # each material in the file renders as its fit's parameters do
+        result = json.loads((tmp_path / "out" / "materials" / row["slot"] / "result.json").read_text())
+        fitted = three.render("gltf_pbr", three.models["gltf_pbr"].complete(result["params"]), scene)
+        assert np.array_equal(three.render_document(material_document(doc, by_name[row["name"]]), scene), fitted)
+
+
+def test_a_gltf_sample_assets_materials_convert_to_cycles(tmp_path, cycles_adapter, three):
+    """Khronos' MetalRoughSpheresNoTextures (factor-only materials): a grey dielectric and a gold metal
+    of it, read from glTF and remapped to Cycles' Principled BSDF."""
+    proc = remap("convert", SAMPLE, "--to", "cycles:principled", "--only", "mat_3", "--only", "mat_94", "--out",
+                 tmp_path / "out", *QUICK, "--validate", "none")
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    rows = {r["name"]: r for r in json.loads((tmp_path / "out" / "convert.json").read_text())["materials"]}
+    assert set(rows) == {"mat_3", "mat_94"}
+    for name, row in rows.items():
+        assert row["status"] not in ("failed", "unsupported"), row
+        assert row["relative_rmse"] < 0.1, row
+        result = json.loads((tmp_path / "out" / "materials" / row["slot"] / "result.json").read_text())
+        metallic = result["params"]["metallic"]
+        assert (metallic > 0.9) if name == "mat_94" else (metallic < 0.2), (name, result["params"])
