@@ -127,6 +127,9 @@ class CyclesAdapter(Adapter):
     glasses = {kind: ("principled", {"transmission_weight": 1.0, "base_color": 1.0, "ior": 1.5, "distribution": "ggx",
                                      "roughness": r})
                for kind, r in (("smooth", 0.0), ("rough", 0.1 ** 0.5))}
+    # The glossy grey dielectric of glTF's metallic-roughness as Blender's Principled BSDF is it (three.js's too).
+    dielectrics = {"glossy": ("principled", {"base_color": 0.5, "metallic": 0.0, "roughness": 0.3, "ior": 1.5,
+                                             "specular_ior_level": 0.5})}
     metals = {kind: ("metallic", {"distribution": "ggx", "roughness": r, "ior": (1.66, 0.88, 0.52),
                                   "extinction": (9.22, 6.27, 4.84)}) for kind, r in (("smooth", 0.1), ("rough", 0.3))}
     textures = True

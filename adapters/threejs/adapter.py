@@ -65,6 +65,7 @@ class ThreeJsAdapter(Adapter):
                           "sphere; no setting of it is light transport")
     glasses = {kind: ("gltf_pbr", {"base_color": 1.0, "metallic": 0.0, "roughness": r, "ior": 1.5, "transmission": 1.0})
                for kind, r in (("smooth", 0.0), ("rough", 0.1 ** 0.5))}
+    dielectrics = {"glossy": ("gltf_pbr", {"base_color": 0.5, "metallic": 0.0, "roughness": 0.3, "ior": 1.5})}
     metals = {kind: ("gltf_pbr", {"base_color": ALUMINIUM, "metallic": 1.0, "roughness": r})
               for kind, r in (("smooth", 0.1), ("rough", 0.3))}
 

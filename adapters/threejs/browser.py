@@ -120,7 +120,10 @@ class Page:
         return np.frombuffer(base64.b64decode(out["pixels"]), np.float32).reshape(views * r, r, 3).copy()
 
     def close(self) -> None:
-        self._in_thread(self._close_here)
+        try:
+            self._in_thread(self._close_here)
+        except RuntimeError:  # at interpreter exit the page's thread is already gone, and the browser with us
+            pass
 
     def _close_here(self) -> None:
         for thing, how in ((self._browser, "close"), (self._pw, "stop")):

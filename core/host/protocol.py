@@ -55,6 +55,11 @@ class Adapter(abc.ABC):
     property of the renderer rather than a fault to fix (a real-time renderer's screen-space
     transmission): `remap check` says it where the glass check fails, instead of advice for a path
     tracer. Empty: none."""
+    dielectrics: ClassVar[dict[str, tuple[str, dict]]] = {}
+    """A glossy grey dielectric by kind: "glossy" (base colour 0.5, GGX α 0.09, IOR 1.5), declared only
+    where the adapter's model is the same BRDF as another adapter's (glTF's metallic-roughness: Cycles'
+    Principled BSDF, three.js). A glossy dielectric's held-out error is judged beyond how far two
+    adapters' glossy dielectrics differ where both declare one, else beyond their white Lambertians."""
     metals: ClassVar[dict[str, tuple[str, dict]]] = {}
     """Aluminium (η 1.66, 0.88, 0.52; k 9.22, 6.27, 4.84) by kind: "smooth" (GGX, α 0.01), "rough"
     (GGX, α 0.09). A metal's held-out error is judged beyond how far two adapters' metals of its

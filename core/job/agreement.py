@@ -15,10 +15,13 @@ Opaque or not, each adapter's white Lambertian (`Adapter.calibration`) is compar
 under each held-out condition: how far the two renderers differ on the simplest material there
 (Cycles and Mitsuba 3.2 % under the rim light, a command-line renderer more) is a floor that a
 material's error there is judged beyond, as it is judged beyond the render noise. A metal's floor
-is measured on the two adapters' aluminium of its kind (`Adapter.metals`) where both declare it."""
+is measured on the two adapters' aluminium of its kind (`Adapter.metals`) where both declare it, a
+glossy dielectric's on their glossy grey dielectric (`Adapter.dielectrics`) where both declare one
+(adapters of one BRDF: three.js and Cycles' Principled BSDF)."""
 
 from __future__ import annotations
 
+from enum import StrEnum
 from typing import Callable
 
 import numpy as np
@@ -81,21 +84,43 @@ SMOOTH_METAL = 0.03
 from it on against their rough one (α 0.09): 0.03 lies between the two."""
 
 
-def metal_kind(look: Appearance | None) -> str | None:
-    """Which of `Adapter.metals` a material read as this is judged against: "smooth", "rough", or
-    None (not a metal, or no reading)."""
-    if look is None or look.kind != Kind.CONDUCTOR:
+class Reference(StrEnum):
+    """The material a pair's floor is measured on, past the white Lambertian: a metal of each kind
+    (`Adapter.metals`), a glossy dielectric (`Adapter.dielectrics`)."""
+
+    SMOOTH_METAL = "smooth"
+    ROUGH_METAL = "rough"
+    GLOSSY_DIELECTRIC = "glossy"
+
+    def declared(self, adapter: Adapter) -> dict[str, tuple[str, dict]]:
+        return adapter.dielectrics if self == Reference.GLOSSY_DIELECTRIC else adapter.metals
+
+    @property
+    def words(self) -> str:
+        return "glossy dielectric" if self == Reference.GLOSSY_DIELECTRIC else f"{self.value} metal"
+
+
+def metal_kind(look: Appearance | None) -> Reference | None:
+    """Which reference a material read as this is judged against: a smooth or rough metal, a glossy
+    dielectric (a dielectric with a specular lobe no sharper than the smooth metal's, opaque), or None
+    (the white Lambertian; or no reading)."""
+    if look is None:
         return None
-    return "smooth" if (look.alpha or 0.0) < SMOOTH_METAL else "rough"
+    sharp = (look.alpha or 0.0) < SMOOTH_METAL
+    if look.kind == Kind.CONDUCTOR:
+        return Reference.SMOOTH_METAL if sharp else Reference.ROUGH_METAL
+    glossy = look.alpha is not None and max(look.specular) > 0.0 and look.transmission == 0.0
+    return Reference.GLOSSY_DIELECTRIC if glossy and not sharp else None
 
 
-def reference(adapter: Adapter, metal: str | None) -> tuple[str, dict] | None:
-    """The material an adapter's floor is measured on: its metal of this kind (`Adapter.metals`:
-    "smooth", "rough") for a metal, else (or where it declares none) its white Lambertian."""
-    return adapter.metals.get(metal) if metal in adapter.metals else adapter.calibration
+def reference(adapter: Adapter, kind: Reference | None) -> tuple[str, dict] | None:
+    """The material an adapter's floor is measured on: its reference of this kind where it declares
+    one, else its white Lambertian."""
+    return kind.declared(adapter)[kind.value] if kind is not None and kind.value in kind.declared(adapter) \
+        else adapter.calibration
 
 
-def _calibration_pair(adapter: Adapter, metal: str | None,
+def _calibration_pair(adapter: Adapter, metal: Reference | None,
                       scenes: tuple[ProbeScene, ProbeScene]) -> tuple[np.ndarray, np.ndarray]:
     model, given = reference(adapter, metal)  # type: ignore[misc]
     params = adapter.models[model].complete(given)
@@ -103,13 +128,15 @@ def _calibration_pair(adapter: Adapter, metal: str | None,
                  .astype(np.float64) for sc in scenes)  # type: ignore[return-value]
 
 
-def _kind(one: Adapter, other: Adapter, metal: str | None) -> str | None:
-    """The metal both adapters declare of this kind, or None (their white Lambertians)."""
-    return metal if metal is not None and metal in one.metals and metal in other.metals else None
+def _kind(one: Adapter, other: Adapter, metal: Reference | str | None) -> Reference | None:
+    """The reference of this kind both adapters declare, or None (their white Lambertians)."""
+    metal = None if metal is None else Reference(metal)
+    both = metal is not None and all(metal.value in metal.declared(a) for a in (one, other))
+    return metal if both else None
 
 
 def calibration_floor(one: Adapter, other: Adapter, condition: str, label: str,
-                      scenes: tuple[ProbeScene, ProbeScene], metal: str | None = None) -> Disagreement | None:
+                      scenes: tuple[ProbeScene, ProbeScene], metal: Reference | str | None = None) -> Disagreement | None:
     """The two adapters' white Lambertians (or, for a metal, their metals of its kind where both declare
     one) under one condition (two renders each, at these two scenes' seeds), compared pixel by pixel: a
     Disagreement when they differ beyond the noise by `FLOOR_MIN` or more."""
@@ -126,13 +153,13 @@ def calibration_floor(one: Adapter, other: Adapter, condition: str, label: str,
     far = beyond_noise(err, floor)
     if far < FLOOR_MIN:
         return None
-    return Disagreement(condition=condition, label=label, kind=WHITE if metal is None else f"{metal} metal",
+    return Disagreement(condition=condition, label=label, kind=WHITE if metal is None else metal.words,
                         error=err, noise_floor=floor, beyond_noise=far)
 
 
 def calibration_floors(source: Adapter, target: Adapter,
                        conditions: list[tuple[str, str, tuple[ProbeScene, ProbeScene]]],
-                       metal: str | None = None) -> dict[str, Disagreement]:
+                       metal: Reference | str | None = None) -> dict[str, Disagreement]:
     """How far the two renderers differ on a white Lambertian (a metal: on their metals of its kind)
     under each held-out condition (not the fit scene, whose differences the fit absorbs): measured once
     a process for each pair, reference and scene. None where an adapter declares no such material, or
@@ -148,7 +175,7 @@ def calibration_floors(source: Adapter, target: Adapter,
 
 def agreement(source: Adapter, target: Adapter, transmissive: bool,
               conditions: list[tuple[str, str, tuple[ProbeScene, ProbeScene]]], threshold: float,
-              judged: Callable[[str], bool] = lambda c: True, metal: str | None = None) -> Agreement:
+              judged: Callable[[str], bool] = lambda c: True, metal: Reference | str | None = None) -> Agreement:
     """Whether the two adapters agree under these conditions (name, label, two scenes of other seeds)
     on a material of this kind; ``judged(name)``: whether the verdict judges that condition; ``metal``:
     the kind of metal the source is ("smooth", "rough"), None for anything else."""

@@ -263,3 +263,40 @@ def test_a_metal_is_judged_beyond_the_renderers_metals_not_their_white_lambertia
     # A kind of metal one adapter does not declare falls back to the white Lambertians.
     assert not calibration_floors(Toy(), Brighter(), conditions, "smooth")
     _MEASURED.clear()
+
+
+def test_a_glossy_dielectric_is_judged_beyond_the_renderers_glossy_dielectrics_where_both_declare_one():
+    from brdfremap.core.job.agreement import _MEASURED, Reference, calibration_floors, metal_kind
+    from brdfremap.core.data.appearance import Appearance
+    from brdfremap.core.data.scene import ProbeScene
+    from brdfremap.core.job.validation import held_out_scenes
+    from brdfremap_example.adapter import ToyAdapter
+
+    class Toy(ToyAdapter):
+        dielectrics = {"glossy": ("toy", {"diffuse": 0.5, "specular": 0.04, "alpha": 0.09})}
+
+    class Brighter(Toy):
+        """Draws its glossy dielectric 20 % brighter than the other, its white Lambertian alike."""
+        name = "brighter"
+
+        def render(self, model, params, scene, lobe=None):
+            img = super().render(model, params, scene, lobe)
+            return img * 1.2 if params["specular"] == 0.04 else img
+
+    class Plain(ToyAdapter):
+        name = "plain"  # declares none: the pair falls back to the white Lambertians
+
+    scene = ProbeScene(resolution=32)
+    conditions = [(c.name, c.label, (a, b)) for c, a, b in held_out_scenes(scene, False, scene.lights)
+                  if c.name == "headlight"]
+    _MEASURED.clear()
+    kind = metal_kind(Appearance(kind="dielectric", alpha=0.2, specular=(0.04,) * 3, diffuse=(0.5,) * 3))
+    assert kind == Reference.GLOSSY_DIELECTRIC
+    floor = calibration_floors(Toy(), Brighter(), conditions, kind)["headlight"]
+    assert floor.kind == "glossy dielectric" and floor.error == pytest.approx(0.2, rel=0.05)
+    assert not calibration_floors(Plain(), Brighter(), conditions, kind)
+    # A near-mirror, a glass and a matte dielectric keep the white Lambertian.
+    assert metal_kind(Appearance(kind="dielectric", alpha=0.01, specular=(0.04,) * 3)) is None
+    assert metal_kind(Appearance(kind="dielectric", alpha=0.2, specular=(0.04,) * 3, transmission=1.0)) is None
+    assert metal_kind(Appearance(kind="dielectric", diffuse=(0.5,) * 3)) is None
+    _MEASURED.clear()
