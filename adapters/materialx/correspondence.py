@@ -36,7 +36,8 @@ TO_PRINCIPLED: dict[str, dict[str, tuple[str, ...]]] = {
                          "diffuse_roughness": ("diffuse_roughness",)},
     "gltf_pbr": {"base_color": ("base_color",), "metallic": ("metallic",), "roughness": ("roughness",),
                  "ior": ("ior",), "specular_ior_level": ("specular",), "specular_tint": ("specular_color",),
-                 "coat_weight": ("clearcoat",), "coat_roughness": ("clearcoat_roughness",)},
+                 "coat_weight": ("clearcoat",), "coat_roughness": ("clearcoat_roughness",),
+                 "transmission_weight": ("transmission",)},
     "UsdPreviewSurface": {"base_color": ("diffuseColor",), "metallic": ("metallic",), "roughness": ("roughness",),
                           "ior": ("ior",), "coat_weight": ("clearcoat",), "coat_roughness": ("clearcoatRoughness",)},
 }

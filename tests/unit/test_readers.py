@@ -145,3 +145,11 @@ def test_a_materialx_glass_is_tinted_by_its_transmission_colour(formats):
     assert water["base_color"] == (1.0, 1.0, 1.0) and water["transmission_weight"] == 1.0
     honey = _read(formats, DATA / "openpbr" / "open_pbr_honey_liquid.mtlx")["Honey_liquid"].material.params
     assert honey["base_color"] == pytest.approx((0.8309, 0.5709, 0.0372), abs=2e-4)  # its ACEScg colour, linear Rec.709
+
+
+def test_a_materialx_gltf_glass_transmits(formats, corpus):
+    """MaterialX's own glTF glass (`transmission` 1): a Principled glass, not an opaque white read
+    with a note that transmission has no counterpart."""
+    entry = _read(formats, corpus / "materialx" / "GltfPbr" / "gltf_pbr_glass.mtlx")["PBR_Glass"]
+    assert entry.material.params["transmission_weight"] == 1.0 and entry.material.params["ior"] == 1.52
+    assert not any("transmission" in n for n in entry.notes)
