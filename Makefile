@@ -36,7 +36,7 @@ system-deps:
 	  $$SUDO apt-get update -qq && $$SUDO apt-get install -y -qq $(APT_NEEDS) >/dev/null; \
 	fi
 
-$(THREE): $(WEB)/package-lock.json
+$(THREE): $(WEB)/package-lock.json | system-deps
 	cd $(WEB) && npm ci --no-audit --no-fund --loglevel=error
 	@touch $(THREE)
 

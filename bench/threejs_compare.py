@@ -1,6 +1,6 @@
 """Cycles Principled materials to three.js: this tool's remap against Blender's own glTF exporter.
 
-    python bench/threejs_compare.py [--only NAME ...] [--out out/threejs-compare]
+    python bench/threejs_compare.py [--only NAME ...]
 
 For each material (configs/materials/cycles-*.yaml): the remap to `threejs:gltf_pbr` (a full remap,
 judged under the held-out lights: its error, verdict, renders and seconds), and Blender's conversion
@@ -70,7 +70,6 @@ def errors(cycles, three, params: dict, ours: dict, exported: dict) -> dict[str,
 def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--only", nargs="*", default=list(MATERIALS))
-    ap.add_argument("--out", default=str(ROOT / "out" / "threejs-compare"))
     args = ap.parse_args()
     reg = registry()
     rows = []

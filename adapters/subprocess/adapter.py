@@ -292,7 +292,7 @@ def _what_it_wrote(output: Path) -> str:
     """The files the renderer did write beside the expected image, if any (image.exr.png)."""
     try:
         found = sorted(f.name for f in output.parent.iterdir()
-                       if f.name not in _REQUEST_FILES and Path(f.name).stem != "scene")
+                       if f.name not in _REQUEST_FILES and f.name.partition(".")[:2] != ("scene", "."))
     except OSError:
         return ""
     return f" (it wrote: {', '.join(found[:8])})" if found else " (it wrote no file there)"

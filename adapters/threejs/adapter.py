@@ -29,6 +29,8 @@ from .browser import THREE, WEB, Page, chromium
 from .library import sphere_document
 from .models import MODELS
 
+MAX_TARGET = 8192
+"""The largest render target this software WebGL allows, pixels a side (SwiftShader's)."""
 SUPERSAMPLE = 8
 """Samples per pixel along each axis (a box filter, as the path tracers' pixels are): a sphere's edge
 is covered to 1/64 of a pixel. At 4 the white Lambertian under the rim light (a crescent at the edge)
@@ -55,7 +57,7 @@ class ThreeJsAdapter(Adapter):
     name = "threejs"
     summary = "three.js (WebGL 2) in headless Chromium: a real-time renderer, glTF materials"
     install_hint = ("apt-get install chromium nodejs npm, then `npm ci` in adapters/threejs/web "
-                    "(make deps does both)")
+                    "(`make test` and `make demo` do both)")
     models = MODELS
     light_types = frozenset({"point", "environment"})
     version = "1"
@@ -68,6 +70,14 @@ class ThreeJsAdapter(Adapter):
     dielectrics = {"glossy": ("gltf_pbr", {"base_color": 0.5, "metallic": 0.0, "roughness": 0.3, "ior": 1.5})}
     metals = {kind: ("gltf_pbr", {"base_color": ALUMINIUM, "metallic": 1.0, "roughness": r})
               for kind, r in (("smooth", 0.1), ("rough", 0.3))}
+
+    @classmethod
+    def scene_problem(cls, scene: ProbeScene) -> str | None:
+        if scene.resolution * SUPERSAMPLE > MAX_TARGET:
+            return (f"renders at most {MAX_TARGET // SUPERSAMPLE} px a side ({SUPERSAMPLE} x {SUPERSAMPLE} samples a "
+                    f"pixel in WebGL render targets of at most {MAX_TARGET} px), and the scene asks for "
+                    f"{scene.resolution}")
+        return super().scene_problem(scene)
 
     @classmethod
     def unavailable_reason(cls) -> str | None:

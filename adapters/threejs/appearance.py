@@ -14,9 +14,34 @@ IOR_RANGE = (1.0, 2.333)
 """three.js clamps a material's IOR to this range."""
 
 
+def gltf_alphas(roughness: float, strength: float) -> tuple[float, float]:
+    """KHR_materials_anisotropy's α along the tangent and across it: the along one raised towards 1
+    by the strength squared, the across one the roughness's (three.js does the same)."""
+    across = max(roughness ** 2, 1e-4)
+    return across + (1.0 - across) * strength ** 2, across
+
+
+def disney_anisotropy(roughness: float, strength: float) -> float:
+    """The Disney anisotropy whose two α have the same ratio as glTF's (`Appearance`'s convention:
+    α along = α / √(1 − 0.9 a), across = α · √(1 − 0.9 a))."""
+    along, across = gltf_alphas(roughness, strength)
+    return min(max((1.0 - across / along) / 0.9, 0.0), 1.0)
+
+
+def gltf_anisotropy(alpha: float, a: float) -> tuple[float, float]:
+    """glTF's roughness and anisotropy strength for a Disney α and anisotropy: the across α is the
+    roughness's, the along one reached by the strength."""
+    aspect = math.sqrt(1.0 - 0.9 * a)
+    along, across = alpha / aspect, alpha * aspect
+    strength = math.sqrt(max(0.0, min(1.0, (along - across) / (1.0 - across)))) if across < 1.0 else 0.0
+    return math.sqrt(min(across, 1.0)), strength
+
+
 def appearance(p: dict[str, Value]) -> Appearance:
-    """How an exporter reads this glTF material (GGX, as glTF's BRDF is)."""
-    alpha = max(float(p["roughness"]) ** 2, 1e-4)  # type: ignore[arg-type]
+    """How an exporter reads this glTF material (GGX, as glTF's BRDF is): an anisotropic one's α is
+    the geometric mean of its two."""
+    along, across = gltf_alphas(float(p["roughness"]), float(p["anisotropy"]))  # type: ignore[arg-type]
+    alpha = max(math.sqrt(along * across), 1e-4)
     base, m = as_rgb(p["base_color"]), float(p["metallic"])  # type: ignore[arg-type]
     extra = _layers(p)
     if m >= 0.5:
@@ -33,7 +58,8 @@ def _layers(p: dict[str, Value]) -> dict:
     if out["transmission"] > 0.0:
         out["transmittance"] = as_rgb(p["base_color"])
     if float(p["anisotropy"]) > 0.0:  # type: ignore[arg-type]
-        out.update(anisotropy=float(p["anisotropy"]), rotation=float(p["anisotropy_rotation"]))  # type: ignore
+        out.update(anisotropy=disney_anisotropy(float(p["roughness"]), float(p["anisotropy"])),  # type: ignore
+                   rotation=float(p["anisotropy_rotation"]))  # type: ignore[arg-type]
     if float(p["clearcoat"]) > 0.0:  # type: ignore[arg-type]
         out["coat"] = Coat(weight=float(p["clearcoat"]), alpha=max(float(p["clearcoat_roughness"]) ** 2, 1e-4),  # type: ignore
                            ior=1.5)
@@ -57,8 +83,9 @@ def from_appearance(a: Appearance, base: dict[str, Value]) -> dict[str, Value]:
         out["ior"] = min(max(ior, IOR_RANGE[0]), IOR_RANGE[1])
         if f0 == 0.0:
             out["specular"] = 0.0
-    if a.anisotropy > 0.0:
-        out.update(anisotropy=a.anisotropy, anisotropy_rotation=a.rotation % 1.0)
+    if a.anisotropy > 0.0 and a.alpha is not None:
+        roughness, strength = gltf_anisotropy(a.alpha, a.anisotropy)
+        out.update(roughness=roughness, anisotropy=strength, anisotropy_rotation=a.rotation % 1.0)
     if a.coat is not None:
         out.update(clearcoat=a.coat.weight, clearcoat_roughness=math.sqrt(a.coat.alpha))
     if a.sheen is not None:

@@ -30,7 +30,9 @@ ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--use-angle=swiftshader"
         "--no-first-run", "--disable-quic"]
 """Software WebGL 2 (SwiftShader), with float render targets, and no network of its own."""
 START_TIMEOUT_MS = 60_000
-RENDER_TIMEOUT_MS = 120_000
+CALL_TIMEOUT_S = 300.0
+"""A page that does not answer a render in this long is given up (a hung WebGL call): RenderError,
+and the next render starts another browser on another thread."""
 
 
 def chromium() -> str | None:
@@ -52,11 +54,25 @@ class Page:
         self._environments: set[str] = set()
         self.startup_seconds = 0.0
         self.info: dict[str, Any] = {}
-        self._thread = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="threejs-page")
+        self._thread = self._new_thread()
 
     def _in_thread(self, fn, *args):
-        """Run ``fn`` on the page's own thread (playwright's objects live there)."""
-        return self._thread.submit(fn, *args).result()
+        """Run ``fn`` on the page's own thread (playwright's objects live there), at most
+        `CALL_TIMEOUT_S`: past it the page and its thread are abandoned (a hung call cannot be
+        interrupted), and a fresh thread drives the next browser."""
+        future = self._thread.submit(fn, *args)
+        try:
+            return future.result(timeout=CALL_TIMEOUT_S)
+        except concurrent.futures.TimeoutError:
+            stuck, self._thread = self._thread, self._new_thread()
+            stuck.shutdown(wait=False)
+            self._pw = self._browser = self._page = None
+            self._environments.clear()
+            raise RenderError(f"threejs: the page did not answer in {CALL_TIMEOUT_S:.0f} s{self._said()}") from None
+
+    @staticmethod
+    def _new_thread() -> concurrent.futures.ThreadPoolExecutor:
+        return concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="threejs-page")
 
     def _start(self) -> None:
         from playwright.sync_api import sync_playwright
@@ -69,19 +85,20 @@ class Page:
             handler = functools.partial(_Quiet, directory=str(WEB))
             self._server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
             threading.Thread(target=self._server.serve_forever, daemon=True).start()
-        self._pw = sync_playwright().start()
-        self._browser = self._pw.chromium.launch(executable_path=exe, args=ARGS)
-        page = self._browser.new_page()
-        page.on("console", lambda m: self._console.append(f"{m.type}: {m.text}"))
-        page.on("pageerror", lambda e: self._console.append(f"page error: {e}"))
-        page.goto(f"http://127.0.0.1:{self._server.server_port}/index.html")
         try:
+            self._pw = sync_playwright().start()
+            self._browser = self._pw.chromium.launch(executable_path=exe, args=ARGS)
+            page = self._browser.new_page()
+            page.on("console", lambda m: self._console.append(f"{m.type}: {m.text}"))
+            page.on("pageerror", lambda e: self._console.append(f"page error: {e}"))
+            page.goto(f"http://127.0.0.1:{self._server.server_port}/index.html", timeout=START_TIMEOUT_MS)
             page.wait_for_function("window.brdfReady === true", timeout=START_TIMEOUT_MS)
-        except Exception as exc:  # playwright's TimeoutError, or the page died
+            self.info = page.evaluate("window.brdf.info()")
+        except Exception as exc:  # the browser would not launch, the page did not load or start
+            said = self._said()
             self._close_here()
-            raise RenderError(f"threejs: the page did not start ({_first(exc)}){self._said()}") from None
+            raise RenderError(f"threejs: the page did not start ({_first(exc)}){said}") from None
         self._page = page
-        self.info = page.evaluate("window.brdf.info()")
         self.startup_seconds = time.perf_counter() - t0
         if not self.info.get("floatTargets"):
             self._close_here()
@@ -136,8 +153,10 @@ class Page:
         self._environments.clear()
 
     def shutdown(self) -> None:
+        """Close the browser, the page's thread and the server; again, nothing."""
         self.close()
         self._thread.shutdown(wait=True)
+        self._thread = self._new_thread()
         if self._server is not None:
             self._server.shutdown()
             self._server.server_close()

@@ -32,7 +32,7 @@ def _dispatch(argv: list[str]) -> int:
     head, rest = (argv[0], argv[1:]) if argv else ("", [])
     if head in handlers:
         return handlers[head](rest)
-    if head.isalpha():  # a word where a command goes (a flag or a path is the one-material form's)
+    if head and head.lstrip("-") == head:  # a word where a command goes, not a flag of the one-material form
         raise ConfigError(f"unknown command {head!r} (commands: {', '.join(COMMANDS)}; or `remap --adapter A --model M "
                           "--source MATERIAL.yaml --out DIR` for one material; see `remap --help`)")
     return remap_cmd.run(remap_cmd.parser().parse_args(argv))

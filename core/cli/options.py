@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import typing
+from enum import Enum
 
 from pydantic import ValidationError
 
@@ -36,7 +37,9 @@ def add_settings(p: argparse.ArgumentParser) -> None:
     for name, info in Settings.model_fields.items():
         text = f"{info.description.rstrip('.')} (default {getattr(DEFAULTS, name)})"
         kw: dict = {"dest": f"settings_{name}", "default": None, "help": text.replace("%", "%%")}
-        choices = typing.get_args(info.annotation)
+        kind = info.annotation
+        choices = tuple(m.value for m in kind) if isinstance(kind, type) and issubclass(kind, Enum) else \
+            typing.get_args(kind)
         if choices and all(isinstance(c, str) for c in choices):
             kw["choices"] = choices
         else:

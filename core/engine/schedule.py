@@ -14,6 +14,7 @@ import numpy as np
 
 from ..data.account import purpose
 from ..data.errors import OptimisationError
+from ..data.scene import Lighting
 from ..data.findings import ChoiceTried, InputsTried, JointRefined, NoisePolished, PredictionNotRealised, StartKept
 from ..data.metrics import delta_e_itp, l2, relative_rmse
 from ..data.schemas import ModelSpec, Value
@@ -398,7 +399,7 @@ def _conclude(run: _Run, plan: Plan, state: _State, assessment: Assessment, join
         validation = run.renders.validation(state.params) if run.settings.validation == ValidationPolicy.HELD_OUT else Validation()
     floor = run.noise_floor(target_noise)
     limit = run.settings.resolve_limit
-    judged = {"scene": floor <= limit, **{c.condition: c.noise_floor <= limit for c in validation.checks}}
+    judged = {Lighting.SCENE: floor <= limit, **{c.condition: c.noise_floor <= limit for c in validation.checks}}
     with purpose("agreement"):
         agreement = run.renders.agreement(state.params, validation, run.threshold, lambda c: judged.get(c, False))
     evidence = Evidence(error=state.err, noise_floor=floor, threshold=run.threshold,

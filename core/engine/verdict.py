@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from ..data.scene import Lighting
 from ..data.findings import (
     CannotResolve,
     DeadParameters,
@@ -82,12 +83,12 @@ def _errors(ev: Evidence) -> list:
     theirs = {d.condition: d for d in ev.agreement.disagree}
     out: list = []
     if ev.noise_floor > ev.resolve_limit:
-        out.append(CannotResolve(condition="scene", label="the scene", noise_floor=ev.noise_floor,
+        out.append(CannotResolve(condition=Lighting.SCENE, label="the scene", noise_floor=ev.noise_floor,
                                  limit=ev.resolve_limit, advice=SCENE_ADVICE, elsewhere=resolved > 0, checked=checked))
-    elif ev.beyond_noise > ev.threshold and "scene" not in theirs:
+    elif ev.beyond_noise > ev.threshold and Lighting.SCENE not in theirs:
         out.append(ErrorAboveThreshold(error=ev.error, threshold=ev.threshold, beyond_noise=ev.beyond_noise))
-    if "scene" in theirs:
-        out.append(_disagree(theirs["scene"], ev.error if ev.beyond_noise > ev.threshold else None))
+    if Lighting.SCENE in theirs:
+        out.append(_disagree(theirs[Lighting.SCENE], ev.error if ev.beyond_noise > ev.threshold else None))
     above = []
     for c in ev.validation.checks:
         if c.noise_floor > ev.resolve_limit:

@@ -89,7 +89,7 @@ class AdapterContract:
         assert row.passed, f"{row.name}: {row.detail}" + (f"; fix: {row.fix}" if row.fix else "")
 
     def test_images(self):
-        environment = "environment" in self.factory.light_types
+        environment = LightType.ENVIRONMENT in self.factory.light_types
         for model, spec in self.adapter.models.items():  # what `render` returns, before `check` reads it
             img = self.adapter.render(model, self._params(model), scene_for(spec, self.scene, environment))
             assert isinstance(img, np.ndarray) and img.dtype == np.float32, f"{model}: {type(img)} {img.dtype}"

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..data.account import purpose
 from ..data.metrics import relative_rmse
-from ..data.scene import ProbeScene
+from ..data.scene import Lighting, ProbeScene
 from ..data.schemas import Lobe, ModelSpec, Value
 from ..engine.levels import Level
 from ..engine.results import Agreement, Validation
@@ -203,7 +203,7 @@ class ProbeRenders:
             self.target.adapter.models[self.target.model].transmissive(params)
         first = self.scene.view_scenes()[0]  # adapters render one view at a time
         fit = (first.with_(seed=first.seed + 2), first.with_(seed=first.seed + 3))
-        conditions = [("scene", "fit scene", fit)] + [
+        conditions = [(Lighting.SCENE, "fit scene", fit)] + [
             (c.name, c.label, (a, b)) for c, a, b in held_out_scenes(self.job_scene, self.other_lights,
                                                                        self.scene.view_scenes()[0].lights,
                                                                        self.point_resolution())

@@ -142,10 +142,11 @@ def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRe
     t0 = time.perf_counter()
     p = plan(spec, file, registry)
     scene = spec.scene.scene(Path(file).resolve().parent)
+    first = first_tasks(p, registry, scene)  # a job the spec cannot make is said before the folder is taken
     with owned(out) as folder:
         runner = Runner(Store(folder), workers, renderer_files=tuple(registry.loaded_files()), quiet=quiet,
                         stop_on_error=False, line=_line)
-        fits = fit_points(p, registry, runner, scene)
+        fits = fit_points(p, registry, runner, scene, first)
 
         def draft(parts: Parts) -> Table:
             return assemble_table(p, file, scene, fits.first, parts)
@@ -177,13 +178,18 @@ def assemble_table(p: Plan, file: str, scene, first, parts: Parts) -> Table:
                  chosen_why=parts.chosen_why, build=parts.build)
 
 
-def fit_points(p: Plan, registry: AdapterRegistry, runner: Runner, scene) -> Fits:
+def first_tasks(p: Plan, registry: AdapterRegistry, scene) -> tuple[tuple[list, list], ...]:
+    """The ids and fit tasks of the grid points, the held-out materials and the coloured points."""
+    return (_tasks(p, registry, scene, "points", "g{:04d}", [v for _, v in p.grid]),
+            _tasks(p, registry, scene, "holdout", "h{:03d}", p.held),
+            _tasks(p, registry, scene, "colours", "c{:04d}", p.colours))
+
+
+def fit_points(p: Plan, registry: AdapterRegistry, runner: Runner, scene, first: tuple) -> Fits:
     """Every grid point, held-out material and coloured point fitted (the coloured points after the
     grid's: a rerun resumes the grid first), the grid's and coloured points' remedies, and path
     following along the axes of ``follow``."""
-    grid_ids, grid_tasks = _tasks(p, registry, scene, "points", "g{:04d}", [v for _, v in p.grid])
-    held_ids, held_tasks = _tasks(p, registry, scene, "holdout", "h{:03d}", p.held)
-    colour_ids, colour_tasks = _tasks(p, registry, scene, "colours", "c{:04d}", p.colours)
+    (grid_ids, grid_tasks), (held_ids, held_tasks), (colour_ids, colour_tasks) = first
     done = runner.run(grid_tasks + held_tasks + colour_tasks)
     n, m = len(grid_tasks), len(grid_tasks) + len(held_tasks)
     grid_done, held_done, colour_done = done[:n], done[n:m], done[m:]
