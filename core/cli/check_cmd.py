@@ -44,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         rows = run_checks(lambda model, params, scene, lobe=None: adapter.render(model, params, scene, lobe), models,
                           white, glass, LightType.ENVIRONMENT in entry.light_types,
-                          getattr(entry.factory, "transmission_limit", ""))
+                          entry.factory.transmission_limit)
     finally:
         adapter.close()
     width = max(len(r.name) for r in rows)

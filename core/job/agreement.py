@@ -100,7 +100,7 @@ class Reference(StrEnum):
         return "glossy dielectric" if self == Reference.GLOSSY_DIELECTRIC else f"{self.value} metal"
 
 
-def metal_kind(look: Appearance | None) -> Reference | None:
+def reference_kind(look: Appearance | None) -> Reference | None:
     """Which reference a material read as this is judged against: a smooth or rough metal, a glossy
     dielectric (a dielectric with a specular lobe no sharper than the smooth metal's, opaque), or None
     (the white Lambertian; or no reading)."""
@@ -120,31 +120,30 @@ def reference(adapter: Adapter, kind: Reference | None) -> tuple[str, dict] | No
         else adapter.calibration
 
 
-def _calibration_pair(adapter: Adapter, metal: Reference | None,
+def _calibration_pair(adapter: Adapter, kind: Reference | None,
                       scenes: tuple[ProbeScene, ProbeScene]) -> tuple[np.ndarray, np.ndarray]:
-    model, given = reference(adapter, metal)  # type: ignore[misc]
+    model, given = reference(adapter, kind)  # type: ignore[misc]
     params = adapter.models[model].complete(given)
     return tuple(check_image(adapter.render(model, params, sc), sc, f"adapter {adapter.name!r} calibration material")
                  .astype(np.float64) for sc in scenes)  # type: ignore[return-value]
 
 
-def _kind(one: Adapter, other: Adapter, metal: Reference | str | None) -> Reference | None:
+def _kind(one: Adapter, other: Adapter, kind: Reference | str | None) -> Reference | None:
     """The reference of this kind both adapters declare, or None (their white Lambertians)."""
-    metal = None if metal is None else Reference(metal)
-    both = metal is not None and all(metal.value in metal.declared(a) for a in (one, other))
-    return metal if both else None
+    kind = None if kind is None else Reference(kind)
+    both = kind is not None and all(kind.value in kind.declared(a) for a in (one, other))
+    return kind if both else None
 
 
 def calibration_floor(one: Adapter, other: Adapter, condition: str, label: str,
-                      scenes: tuple[ProbeScene, ProbeScene], metal: Reference | str | None = None) -> Disagreement | None:
-    """The two adapters' white Lambertians (or, for a metal, their metals of its kind where both declare
-    one) under one condition (two renders each, at these two scenes' seeds), compared pixel by pixel: a
+                      scenes: tuple[ProbeScene, ProbeScene], kind: Reference | str | None = None) -> Disagreement | None:
+    """The two adapters' white Lambertians (or their references of this kind, where both declare one) under one condition (two renders each, at these two scenes' seeds), compared pixel by pixel: a
     Disagreement when they differ beyond the noise by `FLOOR_MIN` or more."""
-    metal = _kind(one, other, metal)
-    key = ("calibration", one.name, one.identity(), other.name, other.identity(), metal, scenes[0].cache_key(),
+    kind = _kind(one, other, kind)
+    key = ("calibration", one.name, one.identity(), other.name, other.identity(), kind, scenes[0].cache_key(),
            scenes[1].cache_key())
     if key not in _MEASURED:
-        a, b = _calibration_pair(one, metal, scenes), _calibration_pair(other, metal, scenes)
+        a, b = _calibration_pair(one, kind, scenes), _calibration_pair(other, kind, scenes)
         if len(_MEASURED) >= KEEP:
             _MEASURED.pop(next(iter(_MEASURED)))
         _MEASURED[key] = (relative_rmse((a[0] + a[1]) / 2, (b[0] + b[1]) / 2),
@@ -153,33 +152,33 @@ def calibration_floor(one: Adapter, other: Adapter, condition: str, label: str,
     far = beyond_noise(err, floor)
     if far < FLOOR_MIN:
         return None
-    return Disagreement(condition=condition, label=label, kind=WHITE if metal is None else metal.words,
+    return Disagreement(condition=condition, label=label, kind=WHITE if kind is None else kind.words,
                         error=err, noise_floor=floor, beyond_noise=far)
 
 
 def calibration_floors(source: Adapter, target: Adapter,
                        conditions: list[tuple[str, str, tuple[ProbeScene, ProbeScene]]],
-                       metal: Reference | str | None = None) -> dict[str, Disagreement]:
-    """How far the two renderers differ on a white Lambertian (a metal: on their metals of its kind)
+                       kind: Reference | str | None = None) -> dict[str, Disagreement]:
+    """How far the two renderers differ on a white Lambertian (or their references of this kind)
     under each held-out condition (not the fit scene, whose differences the fit absorbs): measured once
     a process for each pair, reference and scene. None where an adapter declares no such material, or
     both sides are one renderer."""
-    kind = _kind(source, target, metal)
+    both = _kind(source, target, kind)
     if getattr(source, "unmetered", source) is getattr(target, "unmetered", target) or \
-            reference(source, kind) is None or reference(target, kind) is None:
+            reference(source, both) is None or reference(target, both) is None:
         return {}
-    found = (calibration_floor(source, target, name, label, scenes, metal)
+    found = (calibration_floor(source, target, name, label, scenes, kind)
              for name, label, scenes in conditions if name != Lighting.SCENE)
     return {d.condition: d for d in found if d is not None}
 
 
 def agreement(source: Adapter, target: Adapter, transmissive: bool,
               conditions: list[tuple[str, str, tuple[ProbeScene, ProbeScene]]], threshold: float,
-              judged: Callable[[str], bool] = lambda c: True, metal: Reference | str | None = None) -> Agreement:
+              judged: Callable[[str], bool] = lambda c: True, kind: Reference | str | None = None) -> Agreement:
     """Whether the two adapters agree under these conditions (name, label, two scenes of other seeds)
-    on a material of this kind; ``judged(name)``: whether the verdict judges that condition; ``metal``:
-    the kind of metal the source is ("smooth", "rough"), None for anything else."""
-    floors = calibration_floors(source, target, [c for c in conditions if judged(c[0])], metal)
+    on a material of this kind; ``judged(name)``: whether the verdict judges that condition; ``kind``:
+    the reference the source is judged against (`reference_kind`), None for the white Lambertian."""
+    floors = calibration_floors(source, target, [c for c in conditions if judged(c[0])], kind)
     if not transmissive or getattr(source, "unmetered", source) is getattr(target, "unmetered", target):
         return Agreement(floors=floors)
     lacking = [a.name for a in (source, target) if not {"smooth", "rough"} <= set(a.glasses)]

@@ -19,7 +19,7 @@ from ..engine.levels import Level
 from ..engine.results import Agreement, Validation
 from ..engine.schedule import highlight_pixels
 from ..host.protocol import Adapter, check_image
-from .agreement import agreement, metal_kind
+from .agreement import agreement, reference_kind
 from .cache import RenderCache, render_key
 from .validation import held_out_scenes, point_resolution, validate
 
@@ -208,8 +208,8 @@ class ProbeRenders:
                                                                        self.scene.view_scenes()[0].lights,
                                                                        self.point_resolution())
             if c.name in {k.condition for k in validation.checks}]
-        metal = metal_kind(self.source.adapter.appearance(self.source.model, self.source_params))
-        return agreement(self.source.adapter, self.target.adapter, transmissive, conditions, threshold, judged, metal)
+        kind = reference_kind(self.source.adapter.appearance(self.source.model, self.source_params))
+        return agreement(self.source.adapter, self.target.adapter, transmissive, conditions, threshold, judged, kind)
 
     def notes(self, params: dict[str, Value]) -> list[str]:
         return list(self.target.adapter.notes(self.target.model, params))

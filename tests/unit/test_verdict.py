@@ -233,7 +233,7 @@ def test_a_joint_step_is_judged_beyond_the_noise():
 
 
 def test_a_metal_is_judged_beyond_the_renderers_metals_not_their_white_lambertians():
-    from brdfremap.core.job.agreement import _MEASURED, calibration_floors, metal_kind
+    from brdfremap.core.job.agreement import _MEASURED, calibration_floors, reference_kind
     from brdfremap.core.data.appearance import Appearance
     from brdfremap.core.data.scene import ProbeScene
     from brdfremap.core.job.validation import held_out_scenes
@@ -255,18 +255,18 @@ def test_a_metal_is_judged_beyond_the_renderers_metals_not_their_white_lambertia
                   if c.name == "headlight"]
     _MEASURED.clear()
     assert not calibration_floors(Toy(), Brighter(), conditions)  # their white Lambertians agree
-    metal = metal_kind(Appearance(kind="conductor", alpha=0.2, specular=(0.9,) * 3))
+    metal = reference_kind(Appearance(kind="conductor", alpha=0.2, specular=(0.9,) * 3))
     floor = calibration_floors(Toy(), Brighter(), conditions, metal)["headlight"]
     assert metal == "rough" and floor.kind == "rough metal" and floor.error == pytest.approx(0.1, rel=0.05)
-    assert metal_kind(Appearance(kind="conductor", alpha=0.01, specular=(0.9,) * 3)) == "smooth"
-    assert metal_kind(Appearance(kind="dielectric", diffuse=(0.5,) * 3)) is None
+    assert reference_kind(Appearance(kind="conductor", alpha=0.01, specular=(0.9,) * 3)) == "smooth"
+    assert reference_kind(Appearance(kind="dielectric", diffuse=(0.5,) * 3)) is None
     # A kind of metal one adapter does not declare falls back to the white Lambertians.
     assert not calibration_floors(Toy(), Brighter(), conditions, "smooth")
     _MEASURED.clear()
 
 
 def test_a_glossy_dielectric_is_judged_beyond_the_renderers_glossy_dielectrics_where_both_declare_one():
-    from brdfremap.core.job.agreement import _MEASURED, Reference, calibration_floors, metal_kind
+    from brdfremap.core.job.agreement import _MEASURED, Reference, calibration_floors, reference_kind
     from brdfremap.core.data.appearance import Appearance
     from brdfremap.core.data.scene import ProbeScene
     from brdfremap.core.job.validation import held_out_scenes
@@ -290,13 +290,13 @@ def test_a_glossy_dielectric_is_judged_beyond_the_renderers_glossy_dielectrics_w
     conditions = [(c.name, c.label, (a, b)) for c, a, b in held_out_scenes(scene, False, scene.lights)
                   if c.name == "headlight"]
     _MEASURED.clear()
-    kind = metal_kind(Appearance(kind="dielectric", alpha=0.2, specular=(0.04,) * 3, diffuse=(0.5,) * 3))
+    kind = reference_kind(Appearance(kind="dielectric", alpha=0.2, specular=(0.04,) * 3, diffuse=(0.5,) * 3))
     assert kind == Reference.GLOSSY_DIELECTRIC
     floor = calibration_floors(Toy(), Brighter(), conditions, kind)["headlight"]
     assert floor.kind == "glossy dielectric" and floor.error == pytest.approx(0.2, rel=0.05)
     assert not calibration_floors(Plain(), Brighter(), conditions, kind)
     # A near-mirror, a glass and a matte dielectric keep the white Lambertian.
-    assert metal_kind(Appearance(kind="dielectric", alpha=0.01, specular=(0.04,) * 3)) is None
-    assert metal_kind(Appearance(kind="dielectric", alpha=0.2, specular=(0.04,) * 3, transmission=1.0)) is None
-    assert metal_kind(Appearance(kind="dielectric", diffuse=(0.5,) * 3)) is None
+    assert reference_kind(Appearance(kind="dielectric", alpha=0.01, specular=(0.04,) * 3)) is None
+    assert reference_kind(Appearance(kind="dielectric", alpha=0.2, specular=(0.04,) * 3, transmission=1.0)) is None
+    assert reference_kind(Appearance(kind="dielectric", diffuse=(0.5,) * 3)) is None
     _MEASURED.clear()
