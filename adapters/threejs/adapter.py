@@ -21,10 +21,12 @@ from brdfremap.core.data.atomic import write_text_atomic
 from brdfremap.core.data.environment import radiance
 from brdfremap.core.data.scene import EnvironmentLight, PointLight, ProbeScene
 from brdfremap.core.data.schemas import Value
+from brdfremap.core.data.textures import Texture, TextureMap
 from brdfremap.core.host.protocol import Adapter, ModelChoice, check_image
 
 from . import appearance as _appearance
 from . import gltf
+from . import textures as _textures
 from .browser import THREE, WEB, Page, chromium
 from .library import sphere_document
 from .models import MODELS
@@ -61,6 +63,7 @@ class ThreeJsAdapter(Adapter):
     models = MODELS
     light_types = frozenset({"point", "environment"})
     version = "1"
+    textures = True
     calibration = ("gltf_pbr", {"base_color": 0.8, "metallic": 0.0, "roughness": 1.0, "specular": 0.0})
     transmission_limit = ("three.js's transmission is screen-space, by design: a glass shows a blurred copy of what "
                           "was rendered behind it (the black background), not the environment refracted through the "
@@ -110,13 +113,21 @@ class ThreeJsAdapter(Adapter):
             raise ValueError(f"threejs: model {model!r} has no lobes to render alone")
         return self.render_document(gltf.document(params, MODELS[model]), scene)
 
+    def render_textured(self, model: str, params: dict[str, Value], maps: dict[str, TextureMap],
+                        scene: ProbeScene) -> np.ndarray:
+        """The maps as the glTF textures `write_native` writes (8-bit PNGs in the document), read by
+        GLTFLoader, on a sphere of the probe's texture coordinates."""
+        return self.render_document(gltf.document(MODELS[model].complete(params), MODELS[model], maps=maps), scene)
+
     def render_document(self, doc: dict[str, Any], scene: ProbeScene) -> np.ndarray:
         """The first material of a glTF document, as three.js's GLTFLoader reads it, on the probe
-        sphere (every render goes this way: a `.gltf` this tool writes renders as its fit did)."""
+        sphere (every render goes this way: a `.gltf` this tool writes renders as its fit did). A
+        textured material's sphere has the probe's texture coordinates (`core.data.textures`)."""
         views = [{"camera": self._camera(view.camera), "lights": [self._light(x) for x in view.lights]}
                  for view in scene.all_views()]
         request = {"resolution": scene.resolution, "supersample": SUPERSAMPLE,
-                   "sphere": {"center": list(scene.sphere.center), "radius": scene.sphere.radius},
+                   "sphere": {"center": list(scene.sphere.center), "radius": scene.sphere.radius,
+                              "textured": bool(doc.get("textures"))},
                    "views": views, "material": doc}
         self.renders += 1
         img = self.page.render(request, len(views))
@@ -149,8 +160,12 @@ class ThreeJsAdapter(Adapter):
         return ModelChoice("gltf_pbr", {}, f"{kind}: glTF's metallic-roughness, the one model three.js reads")
 
     def write_native(self, model: str, params: dict[str, Value], out_dir: Path,
-                     textures=None) -> list[Path]:
-        doc = sphere_document([("brdf-remap", params)], MODELS[model])
+                     textures: dict[str, Texture] | None = None) -> list[Path]:
+        """`material.gltf`: the material on a sphere; ``textures`` (files in ``out_dir``) embedded as
+        glTF textures."""
+        spec = MODELS[model]
+        maps = _textures.maps_from_files(Path(out_dir), textures, _textures.kinds(spec)) if textures else {}
+        doc = sphere_document([("brdf-remap", params)], spec, [maps])
         return [write_text_atomic(Path(out_dir) / "material.gltf", json.dumps(doc, indent=1) + "\n")]
 
     def close(self) -> None:

@@ -10,6 +10,9 @@ import math
 from typing import Any
 
 from brdfremap.core.data.schemas import ModelSpec, Value
+from brdfremap.core.data.textures import TextureMap
+
+from . import textures
 
 GENERATOR = "brdf-remap"
 
@@ -70,10 +73,14 @@ def extensions_used(materials: list[dict[str, Any]]) -> list[str]:
     return sorted({e for m in materials for e in m.get("extensions", {})})
 
 
-def document(p: dict[str, Value], spec: ModelSpec, name: str = "material") -> dict[str, Any]:
-    """A glTF document holding this one material (no mesh): what three.js's GLTFLoader reads."""
+def document(p: dict[str, Value], spec: ModelSpec, name: str = "material",
+             maps: dict[str, TextureMap] | None = None) -> dict[str, Any]:
+    """A glTF document holding this one material (no mesh): what three.js's GLTFLoader reads; with
+    ``maps``, its inputs driven by them as glTF textures (embedded PNGs)."""
     mat = material(name, p, spec)
     doc: dict[str, Any] = {"asset": {"version": "2.0", "generator": GENERATOR}, "materials": [mat]}
+    if maps:
+        textures.embed(doc, mat, maps)
     used = extensions_used([mat])
     if used:
         doc["extensionsUsed"] = used

@@ -17,7 +17,9 @@ from brdfremap.core.data.errors import ConfigError
 from brdfremap.core.data.schemas import Material, ModelSpec, Value
 from brdfremap.core.library.entries import Converted, Entry
 
-from . import gltf
+from brdfremap.core.data.textures import TextureMap
+
+from . import gltf, textures
 from .models import MODELS
 
 RINGS, SEGMENTS = 64, 128
@@ -26,14 +28,15 @@ SPACING = 2.5
 
 
 def sphere_mesh(rings: int = RINGS, segments: int = SEGMENTS) -> dict[str, np.ndarray]:
-    """A UV sphere of radius 1: positions, normals, texture coordinates, tangents along the
-    latitudes (the probe's: anisotropy turns from them) and triangle indices, counter-clockwise
-    seen from outside."""
+    """A UV sphere of radius 1, its pole along +y: positions, normals, the probe's texture coordinates
+    (`core.data.textures`: u = φ / 2π from +x, increasing away from a viewer on +z; v = θ / π from the
+    top pole), tangents along the latitudes (the probe's: anisotropy turns from them) and triangle
+    indices, counter-clockwise seen from outside."""
     theta, phi = np.meshgrid(np.linspace(0.0, math.pi, rings + 1), np.linspace(0.0, 2.0 * math.pi, segments + 1),
                              indexing="ij")
     s, c = np.sin(theta), np.cos(theta)
-    pos = np.stack([-s * np.cos(phi), c, s * np.sin(phi)], axis=-1).reshape(-1, 3)
-    tangent = np.stack([np.sin(phi), np.zeros_like(phi), np.cos(phi)], axis=-1).reshape(-1, 3)  # d(pos)/d(phi)
+    pos = np.stack([s * np.cos(phi), c, -s * np.sin(phi)], axis=-1).reshape(-1, 3)
+    tangent = np.stack([-np.sin(phi), np.zeros_like(phi), -np.cos(phi)], axis=-1).reshape(-1, 3)  # d(pos)/d(phi)
     uv = np.stack([phi / (2 * math.pi), theta / math.pi], axis=-1).reshape(-1, 2)
     idx = []
     for i in range(rings):
@@ -66,23 +69,30 @@ def _mesh_parts(mesh: dict[str, np.ndarray]) -> tuple[bytes, list[dict], list[di
     return blob, views, accessors, {k: v for k, v in attrs.items() if k != "indices"}, attrs["indices"]
 
 
-def sphere_document(materials: list[tuple[str, dict[str, Value]]], spec: ModelSpec) -> dict[str, Any]:
-    """A glTF document: each material (name, complete parameters) on a unit sphere of its own."""
+def sphere_document(materials: list[tuple[str, dict[str, Value]]], spec: ModelSpec,
+                    maps: list[dict[str, TextureMap]] | None = None) -> dict[str, Any]:
+    """A glTF document: each material (name, complete parameters) on a unit sphere of its own; with
+    ``maps`` (one dict a material, in their order), its inputs driven by them as glTF textures."""
+    maps = maps or [{} for _ in materials]
     mats = [gltf.material(name, spec.complete(params), spec) for name, params in materials]
     turned = [bool(m.get("extensions", {}).get("KHR_materials_anisotropy")) for m in mats]
-    mesh = {k: v for k, v in sphere_mesh().items() if k != "TEXCOORD_0" and (k != "TANGENT" or any(turned))}
+    mesh = {k: v for k, v in sphere_mesh().items() if (k != "TEXCOORD_0" or any(maps)) and (k != "TANGENT" or any(turned))}
     blob, views, accessors, attributes, indices = _mesh_parts(mesh)
-    plain = {k: v for k, v in attributes.items() if k != "TANGENT"}  # tangents only where anisotropy turns from them
+    def used(i: int) -> dict[str, int]:  # tangents only where anisotropy turns from them, UVs where a texture is
+        return {k: v for k, v in attributes.items() if (k != "TANGENT" or turned[i]) and (k != "TEXCOORD_0" or maps[i])}
+
     doc: dict[str, Any] = {
         "asset": {"version": "2.0", "generator": gltf.GENERATOR},
         "scene": 0, "scenes": [{"nodes": list(range(len(mats)))}],
         "nodes": [{"name": m["name"], "mesh": i, "translation": [SPACING * i, 0.0, 0.0]} for i, m in enumerate(mats)],
-        "meshes": [{"name": m["name"], "primitives": [{"attributes": attributes if turned[i] else plain,
-                                                       "indices": indices, "material": i}]}
+        "meshes": [{"name": m["name"], "primitives": [{"attributes": used(i), "indices": indices, "material": i}]}
                    for i, m in enumerate(mats)],
         "materials": mats, "accessors": accessors, "bufferViews": views,
         "buffers": [{"byteLength": len(blob),
                      "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}]}
+    for mat, m in zip(mats, maps):
+        if m:
+            textures.embed(doc, mat, m)
     used = gltf.extensions_used(mats)
     if used:
         doc["extensionsUsed"] = used
@@ -90,13 +100,38 @@ def sphere_document(materials: list[tuple[str, dict[str, Value]]], spec: ModelSp
 
 
 def material_document(doc: dict[str, Any], index: int) -> dict[str, Any]:
-    """One material of a glTF document, alone in a document of its own (as the adapter renders one)."""
-    mat = dict(doc["materials"][index])
+    """One material of a glTF document, alone in a document of its own (as the adapter renders one),
+    with the textures, images and samplers it reads, numbered anew."""
+    mat = json.loads(json.dumps(doc["materials"][index]))
     out: dict[str, Any] = {"asset": {"version": "2.0"}, "materials": [mat]}
+    refs = _texture_refs(mat)
+    if refs:
+        images, samplers, texs = [], [], []
+        for ref in refs:
+            tex = dict(doc["textures"][ref["index"]])
+            for key, pool, into in (("source", doc.get("images", []), images),
+                                    ("sampler", doc.get("samplers", []), samplers)):
+                if key in tex:
+                    item = pool[tex[key]]
+                    if item not in into:
+                        into.append(item)
+                    tex[key] = into.index(item)
+            if tex not in texs:
+                texs.append(tex)
+            ref["index"] = texs.index(tex)
+        out.update(textures=texs, images=images, samplers=samplers)
     used = sorted(mat.get("extensions", {}))
     if used:
         out["extensionsUsed"] = used
     return out
+
+
+def _texture_refs(node: Any) -> list[dict[str, Any]]:
+    """Every texture reference ({"index": n, ...} under a glTF `...Texture` key) in a material."""
+    if not isinstance(node, dict):
+        return []
+    found = [v for k, v in node.items() if k in gltf.TEXTURES and isinstance(v, dict) and "index" in v]
+    return found + [r for k, v in node.items() if k not in gltf.TEXTURES for r in _texture_refs(v)]
 
 
 class GltfLibraryWriter:
@@ -106,7 +141,9 @@ class GltfLibraryWriter:
 
     def write(self, folder: Path, items: list[Converted]) -> list[Path]:
         spec = MODELS["gltf_pbr"]
-        doc = sphere_document([(i.name, i.params) for i in items], spec)
+        kinds = textures.kinds(spec)
+        maps = [textures.maps_from_files(folder, i.textures, kinds) for i in items]
+        doc = sphere_document([(i.name, i.params) for i in items], spec, maps)
         return [write_text_atomic(Path(folder) / "library.gltf", json.dumps(doc, indent=1) + "\n")]
 
 

@@ -174,8 +174,9 @@ def kind_of_file(lower: float, upper: float, rgb: bool) -> tuple[str, str]:
     return ".exr", "linear"
 
 
-def encode(values: np.ndarray, suffix: str, colorspace: str) -> bytes:
-    """A map's file as bytes: a 16-bit PNG (sRGB-encoded for a colour map) or a float EXR."""
+def encode(values: np.ndarray, suffix: str, colorspace: str, *, bits: int = 16) -> bytes:
+    """A map's file as bytes: a PNG of ``bits`` (16, or 8 for formats that take only 8-bit images: glTF;
+    sRGB-encoded for a colour map) or a float EXR. The channels are as given (1, 3 or 4)."""
     import tempfile
 
     import OpenImageIO as oiio
@@ -184,7 +185,7 @@ def encode(values: np.ndarray, suffix: str, colorspace: str) -> bytes:
     arr = np.ascontiguousarray(arr, np.float32)
     if colorspace == ColourSpace.SRGB:
         arr = _convert(arr, LINEAR, SRGB)
-    fmt = "uint16" if suffix == ".png" else "float"
+    fmt = ("uint16" if bits == 16 else "uint8") if suffix == ".png" else "float"
     with tempfile.TemporaryDirectory(prefix="brdfremap-") as tmp:
         path = Path(tmp) / f"map{suffix}"
         spec = oiio.ImageSpec(arr.shape[1], arr.shape[0], arr.shape[2], fmt)

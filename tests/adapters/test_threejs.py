@@ -17,6 +17,7 @@ from brdfremap.adapters.threejs.library import GltfReader, material_document, sp
 from brdfremap.core.data.errors import RenderError
 from brdfremap.core.data.metrics import relative_rmse
 from brdfremap.core.data.scene import EnvironmentLight, PointLight, ProbeScene
+from brdfremap.core.data.textures import TextureMap
 from brdfremap.core.host import check
 from brdfremap.core.testing import analytic_lambert, sphere_hits
 from conftest import ROOT, need_adapter
@@ -205,3 +206,125 @@ def test_remap_check_threejs_exits_0_and_calls_the_glass_a_limit():
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "limit   transmission" in proc.stdout and "screen-space" in proc.stdout
     assert proc.stdout.count("  pass    ") == 6
+
+
+# --- Textures: the tables' texel-by-texel path into glTF ------------------------------------------------
+
+TEX_SCENE = ProbeScene().overridden(resolution=64, spp=64)
+
+
+def _checker(seed=1, rows=6, cols=12, texel=8):
+    cells = np.random.default_rng(seed).uniform(0.05, 0.9, (rows, cols, 3)).astype(np.float32)
+    return np.repeat(np.repeat(cells, texel, axis=0), texel, axis=1)
+
+
+def test_three_js_lays_a_texture_on_the_sphere_as_mitsuba_does(three, mitsuba_adapter):
+    tex = _checker()
+    white = {"base_color": 0.5, "metallic": 0.0, "roughness": 1.0, "specular": 0.0}
+    mi = mitsuba_adapter.render_textured("diffuse", {"reflectance": (0.5,) * 3},
+                                         {"reflectance": TextureMap(tex, "nearest")}, TEX_SCENE)
+    th = three.render_textured("gltf_pbr", white, {"base_color": TextureMap(tex, "nearest")}, TEX_SCENE)
+    same = relative_rmse(mi, th)
+    assert same < 0.02, same
+    for wrong in (tex[::-1], tex[:, ::-1], np.roll(tex, tex.shape[1] // 12, axis=1)):  # flipped, mirrored, turned
+        off = three.render_textured("gltf_pbr", white, {"base_color": TextureMap(wrong, "nearest")}, TEX_SCENE)
+        assert relative_rmse(mi, off) > 10 * same
+
+
+def _srgb8(v: float) -> float:
+    """A linear value as an 8-bit sRGB PNG holds it, decoded."""
+    e = round((1.055 * v ** (1 / 2.4) - 0.055 if v > 0.0031308 else 12.92 * v) * 255) / 255
+    return ((e + 0.055) / 1.055) ** 2.4 if e > 0.04045 else e / 12.92
+
+
+def test_a_constant_texture_renders_as_its_8_bit_value(three):
+    spec = three.models["gltf_pbr"]
+    given = {"base_color": 0.6, "metallic": 1.0, "roughness": 0.45}
+    maps = {"roughness": TextureMap(np.full((4, 4), 0.45, np.float32)),
+            "base_color": TextureMap(np.full((4, 4, 3), 0.6, np.float32))}
+    textured = three.render_textured("gltf_pbr", given, maps, TEX_SCENE)
+    held = three.render("gltf_pbr", spec.complete({**given, "base_color": _srgb8(0.6), "roughness": 115 / 255}),
+                        TEX_SCENE)
+    assert relative_rmse(held, textured) < 1e-4  # the texture's 8 bits, and nothing else, differ from the factors
+    rougher = three.render_textured("gltf_pbr", given, {**maps, "roughness": TextureMap(np.full((4, 4), 0.6,
+                                                                                                 np.float32))}, TEX_SCENE)
+    assert relative_rmse(held, rougher) > 0.05  # the texture, not the factor, is what rendered
+
+
+def _textured_materials():
+    h, w = 32, 64
+    ramp = np.broadcast_to(np.linspace(0.1, 0.9, w, dtype=np.float32), (h, w)).copy()
+    return [("plain gold", {"base_color": (1.0, 0.77, 0.34), "metallic": 1.0, "roughness": 0.3}, {}),
+            ("worn", {"base_color": 0.5, "metallic": 1.0, "roughness": 0.5, "ior": 1.6},
+             {"base_color": TextureMap(_checker(seed=2, rows=4, cols=8, texel=8)), "roughness": TextureMap(ramp),
+              "metallic": TextureMap(np.where(ramp > 0.5, 1.0, 0.0).astype(np.float32), "nearest")})]
+
+
+def test_a_textured_gltf_validates_and_renders_as_its_textured_check(three, tmp_path):
+    spec = three.models["gltf_pbr"]
+    mats = _textured_materials()
+    doc = sphere_document([(n, p) for n, p, _ in mats], spec, [m for _, _, m in mats])
+    path = tmp_path / "library.gltf"
+    path.write_text(json.dumps(doc))
+    issues = validate(path)
+    assert issues["numErrors"] == issues["numWarnings"] == issues["numInfos"] == 0, issues["messages"]
+    worn = doc["materials"][1]["pbrMetallicRoughness"]
+    assert worn["baseColorFactor"] == [1.0, 1.0, 1.0, 1.0] and worn["roughnessFactor"] == worn["metallicFactor"] == 1.0
+    assert len(doc["images"]) == 2 and "baseColorTexture" not in doc["materials"][0]["pbrMetallicRoughness"]
+    assert "TEXCOORD_0" not in doc["meshes"][0]["primitives"][0]["attributes"]  # only where a texture is read
+    for i, (name, params, maps) in enumerate(mats):
+        alone = material_document(json.loads(path.read_text()), i)
+        want = three.render_textured("gltf_pbr", params, maps, TEX_SCENE) if maps else \
+            three.render("gltf_pbr", spec.complete(params), TEX_SCENE)
+        assert np.array_equal(three.render_document(alone, TEX_SCENE), want), name
+
+
+def test_blender_imports_a_textured_gltf_with_its_images(tmp_path, cycles_adapter):
+    spec = ThreeJsAdapter.models["gltf_pbr"]
+    mats = _textured_materials()
+    path = tmp_path / "library.gltf"
+    path.write_text(json.dumps(sphere_document([(n, p) for n, p, _ in mats], spec, [m for _, _, m in mats])))
+    code = ("import bpy\n"
+            "bpy.ops.wm.read_factory_settings(use_empty=True)\n"
+            f"bpy.ops.import_scene.gltf(filepath={str(path)!r})\n"
+            "m = bpy.data.materials['worn']\n"
+            "p = next(n for n in m.node_tree.nodes if n.type == 'BSDF_PRINCIPLED')\n"
+            "print('LINKED', sorted(s.name for s in p.inputs if s.is_linked))\n"
+            "print('IMAGES', sorted((i.size[0], i.size[1]) for i in bpy.data.images if i.users))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert "LINKED ['Base Color', 'Metallic', 'Roughness']" in out.stdout, out.stdout[-2000:]
+    assert "IMAGES [(64, 32), (64, 32)]" in out.stdout, out.stdout[-2000:]
+
+
+TABLE = ROOT / "configs" / "tables" / "built" / "mitsuba-roughconductor-to-threejs-gltf.json"
+
+
+def test_a_textured_mitsuba_metal_converts_to_gltf_texel_by_texel(tmp_path, mitsuba_adapter, three):
+    """The demo scene's worn copper (its roughness and colour maps) through the shipped table: its maps
+    in library.gltf as glTF textures, the file valid, and it renders as its textured check did."""
+    from brdfremap.core.data.imageio import read_image
+    from brdfremap.core.data.scene import EnvironmentLight
+
+    out = tmp_path / "out"
+    proc = remap("convert", ROOT / "examples" / "library" / "scene.xml", "--to", "threejs", "--only", "worn copper",
+                 "--table", TABLE, "--out", out, *QUICK)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    path = out / "library.gltf"
+    issues = validate(path)
+    assert issues["numErrors"] == issues["numWarnings"] == issues["numInfos"] == 0, issues["messages"]
+    doc = json.loads(path.read_text())
+    pbr = doc["materials"][0]["pbrMetallicRoughness"]
+    assert doc["materials"][0]["name"] == "worn copper" and len(doc["images"]) == 2
+    assert {"baseColorTexture", "metallicRoughnessTexture"} <= set(pbr)
+    row = json.loads((out / "convert.json").read_text())["materials"][0]
+    folder = out / "materials" / row["slot"]
+    record = json.loads((folder / "result.json").read_text())["textures"]
+    assert record["table"] == "Mitsuba roughconductor (Beckmann) -> three.js glTF PBR"
+    assert {m["param"] for m in record["maps"]} == {"base_color", "metallic", "roughness"}
+    assert "ior" in record["held"]  # glTF takes an IOR only as a number: its mean is written, and said
+    studio = next(c for c in record["checks"] if c["condition"] == "environment")
+    scene = ProbeScene(resolution=studio["resolution"], lights=[EnvironmentLight(type="environment", map="studio")])
+    rendered = three.render_document(material_document(doc, 0), scene)
+    assert np.array_equal(rendered, read_image(folder / "target-textured.exr"))  # the file is what was checked
+    assert relative_rmse(read_image(folder / "source-textured.exr"), rendered) == pytest.approx(studio["error"], rel=1e-4)

@@ -20,9 +20,21 @@ const environments = new Map();
 const spheres = new Map();
 const targets = new Map();
 
-function sphere(radius) {
-  if (!spheres.has(radius)) spheres.set(radius, new THREE.SphereGeometry(radius, 256, 128));
-  return spheres.get(radius);
+// The probe sphere. A textured one has the probe's texture coordinates (core/data/textures.py:
+// u = phi / 2pi from +x, increasing away from a viewer on +z; v = theta / pi from the top pole, an
+// image's top row at v = 0, as glTF reads images): three.js's sphere begun half a turn round (its
+// vertices are the same), its v turned over.
+function sphere(radius, textured) {
+  const key = `${radius} ${textured}`;
+  if (!spheres.has(key)) {
+    const g = textured ? new THREE.SphereGeometry(radius, 256, 128, Math.PI) : new THREE.SphereGeometry(radius, 256, 128);
+    if (textured) {
+      const uv = g.attributes.uv;
+      for (let i = 0; i < uv.count; i++) uv.setY(i, 1 - uv.getY(i));
+    }
+    spheres.set(key, g);
+  }
+  return spheres.get(key);
 }
 
 function target(n) {
@@ -116,11 +128,12 @@ async function render(req) {
   if (lost) throw new Error("the WebGL context was lost");
   const t0 = performance.now();
   const mat = await material(req.material);
-  const mesh = new THREE.Mesh(sphere(req.sphere.radius), mat);
+  const mesh = new THREE.Mesh(sphere(req.sphere.radius, !!req.sphere.textured), mat);
   mesh.position.set(...req.sphere.center);
   const r = req.resolution, ss = req.supersample;
   const out = new Float32Array(r * r * 3 * req.views.length);
   req.views.forEach((view, i) => downsample(renderView(mesh, view, r * ss), r, ss, out, i * r * r * 3));
+  for (const value of Object.values(mat)) if (value && value.isTexture) value.dispose();
   mat.dispose();
   if (lost) throw new Error("the WebGL context was lost");
   return { pixels: encode(out), ms: performance.now() - t0 };
