@@ -141,3 +141,35 @@ def read_material(m: dict[str, Any]) -> tuple[dict[str, Value], list[str], list[
     if other:
         notes.append(f"extensions not read: {', '.join(other)}")
     return params, notes, driven
+
+
+MAPPED = {"baseColorTexture": (("base_color", "baseColorFactor", None),),
+          "metallicRoughnessTexture": (("roughness", "roughnessFactor", 1), ("metallic", "metallicFactor", 2))}
+"""The core textures a table can remap texel by texel: each parameter it drives, the factor glTF
+multiplies it by, and its channel (None: the image's colour)."""
+
+
+def mapped_textures(m: dict[str, Any]) -> tuple[dict[str, tuple[int, int | None]], list[str]]:
+    """The parameters driven by a core texture whose factor is 1 (the texture is then the value):
+    parameter -> (texture index, channel); and notes on those read as their factor instead."""
+    pbr = m.get("pbrMetallicRoughness", {}) or {}
+    out: dict[str, tuple[int, int | None]] = {}
+    notes: list[str] = []
+    for key, inputs in MAPPED.items():
+        ref = pbr.get(key)
+        if not isinstance(ref, dict) or not isinstance(ref.get("index"), int):
+            continue
+        if ref.get("texCoord", 0) != 0 or "KHR_texture_transform" in (ref.get("extensions") or {}):
+            notes.append(f"its {key} is read as stored: its texture coordinates' set or transform is not carried")
+        for name, factor, channel in inputs:
+            given = [float(x) for x in _as_list(pbr.get(factor, 1.0))][:3]
+            if any(x != 1.0 for x in given):
+                notes.append(f"its {key} is scaled by {factor} {_listed(given)}: {name} is read as the factor, "
+                             "not texel by texel")
+                continue
+            out[name] = (ref["index"], channel)
+    return out, notes
+
+
+def _listed(v: list[float]) -> str:
+    return ", ".join(f"{x:g}" for x in v)

@@ -17,9 +17,9 @@ from brdfremap.core.data.errors import ConfigError
 from brdfremap.core.data.schemas import Material, ModelSpec, Value
 from brdfremap.core.library.entries import Converted, Entry
 
-from brdfremap.core.data.textures import TextureMap
+from brdfremap.core.data.textures import ColourSpace, Filter, Texture, TextureMap, texture
 
-from . import gltf, textures
+from . import gltf, images, textures
 from .models import MODELS
 
 RINGS, SEGMENTS = 64, 128
@@ -147,8 +147,8 @@ class GltfLibraryWriter:
         return [write_text_atomic(Path(folder) / "library.gltf", json.dumps(doc, indent=1) + "\n")]
 
 
-def read_document(path: Path) -> dict[str, Any]:
-    """A .gltf or .glb file's JSON (pygltflib reads both)."""
+def read_document(path: Path) -> tuple[dict[str, Any], bytes | None]:
+    """A .gltf or .glb file's JSON (pygltflib reads both), and a .glb's binary chunk."""
     from pygltflib import GLTF2
 
     try:
@@ -158,10 +158,14 @@ def read_document(path: Path) -> dict[str, Any]:
                           file=str(path)) from None
     if g is None:
         raise ConfigError("cannot read it as glTF (not a .gltf or .glb file)", file=str(path))
-    return json.loads(g.to_json())
+    return json.loads(g.to_json()), g.binary_blob()
 
 
 class GltfReader:
+    """glTF materials as `threejs:gltf_pbr` sources. A base colour, metallic or roughness driven by its
+    core texture (of factor 1) is read as that texture, which a table of `gltf_pbr` remaps texel by
+    texel; every other texture-driven input is listed and read as its factor."""
+
     name = "glTF 2.0 (.gltf, .glb)"
     suffixes = (".gltf", ".glb")
 
@@ -169,23 +173,47 @@ class GltfReader:
         return True
 
     def read(self, path: Path) -> list[Entry]:
-        doc = read_document(path)
+        doc, blob = read_document(path)
         version = str((doc.get("asset") or {}).get("version", ""))
-        if version.split(".")[0] != "2":
+        if version.partition(".")[0] != "2":
             raise ConfigError(f"is glTF {version or 'of no version'}: this reads glTF 2.0", file=str(path),
                               field="asset.version")
-        return [self._entry(m, i, str(path)) for i, m in enumerate(doc.get("materials") or [])]
+        return [self._entry(m, i, Path(path), doc, blob) for i, m in enumerate(doc.get("materials") or [])]
 
     @staticmethod
-    def _entry(m: dict[str, Any], i: int, file: str) -> Entry:
+    def _entry(m: dict[str, Any], i: int, path: Path, doc: dict[str, Any], blob: bytes | None) -> Entry:
         name = m.get("name") or f"material {i}"
         params, notes, textured = gltf.read_material(m)
         spec = MODELS["gltf_pbr"]
         clipped = {k: spec.param(k).clip(tuple(v) if isinstance(v, (list, tuple)) else v) for k, v in params.items()}
         notes += [f"{k} {_shown(params[k])} is outside the model's bounds: read as {_shown(v)}"
                   for k, v in clipped.items() if _shown(v) != _shown(params[k])]
-        return Entry(name=name, file=file, notes=notes, textured=textured,
-                     material=Material(adapter="threejs", model="gltf_pbr", name=name, params=clipped))
+        maps, said = _maps(m, doc, blob, path, name)
+        return Entry(name=name, file=str(path), notes=notes + said, textured=textured,
+                     material=Material(adapter="threejs", model="gltf_pbr", name=name, params=clipped,
+                                       textures=maps))
+
+
+def _maps(m: dict[str, Any], doc: dict[str, Any], blob: bytes | None, path: Path,
+          name: str) -> tuple[dict[str, Texture], list[str]]:
+    """The material's core textures as textures of its parameters, and notes on those that are not."""
+    wanted, notes = gltf.mapped_textures(m)
+    out: dict[str, Texture] = {}
+    for param, (index, channel) in wanted.items():
+        try:
+            texs = doc.get("textures") or []
+            tex = texs[index] if 0 <= index < len(texs) else None
+            if tex is None or not isinstance(tex.get("source"), int):
+                raise ConfigError(f"texture {index} has no image glTF 2.0 reads")
+            file = images.image_file(doc, blob, path.parent, tex["source"])
+            samplers, which = doc.get("samplers") or [], tex.get("sampler")
+            sampler = samplers[which] if isinstance(which, int) and 0 <= which < len(samplers) else {}
+            filt = Filter.NEAREST if sampler.get("magFilter") == textures.NEAREST else Filter.LINEAR
+            space = ColourSpace.SRGB if channel is None else ColourSpace.LINEAR
+            out[param] = texture(file, space, filt, channel=channel, where=f"{name}: {param}")
+        except ConfigError as exc:
+            notes.append(f"{param}: {exc}: read as its factor")
+    return out, notes
 
 
 def _shown(v: Value) -> str:

@@ -328,3 +328,111 @@ def test_a_textured_mitsuba_metal_converts_to_gltf_texel_by_texel(tmp_path, mits
     rendered = three.render_document(material_document(doc, 0), scene)
     assert np.array_equal(rendered, read_image(folder / "target-textured.exr"))  # the file is what was checked
     assert relative_rmse(read_image(folder / "source-textured.exr"), rendered) == pytest.approx(studio["error"], rel=1e-4)
+
+
+def _png(values: np.ndarray) -> bytes:
+    from brdfremap.core.data.textures import encode
+
+    return encode(values, ".png", "linear", bits=8)
+
+
+def test_a_gltfs_core_textures_are_read_from_files_data_uris_and_a_glb(tmp_path, monkeypatch):
+    """Base colour, metallic and roughness driven by their core textures (of factor 1) are read as
+    textures (the packed image's green and blue channels), wherever the image is: a file beside the
+    glTF, a data URI, a .glb's binary chunk; embedded ones are written once, by content, to the cache."""
+    import base64
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    ramp = np.broadcast_to(np.linspace(0.0, 1.0, 16, dtype=np.float32), (8, 16))
+    packed = np.stack([np.ones_like(ramp), ramp, 1.0 - ramp], axis=-1)
+    (tmp_path / "orm.png").write_bytes(_png(packed))
+    colour = "data:image/png;base64," + base64.b64encode(_png(np.full((8, 16, 3), 0.5, np.float32))).decode()
+    doc = {"asset": {"version": "2.0"}, "images": [{"uri": colour}, {"uri": "orm.png"}, {"uri": "https://x/y.png"}],
+           "samplers": [{"magFilter": 9728, "minFilter": 9728}],
+           "textures": [{"source": 0}, {"source": 1, "sampler": 0}, {"source": 2}],
+           "materials": [
+               {"name": "packed", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0},
+                                                           "metallicRoughnessTexture": {"index": 1}}},
+               {"name": "scaled", "pbrMetallicRoughness": {"metallicFactor": 0.5,
+                                                           "metallicRoughnessTexture": {"index": 1}}},
+               {"name": "remote", "pbrMetallicRoughness": {"baseColorTexture": {"index": 2}}}]}
+    path = tmp_path / "m.gltf"
+    path.write_text(json.dumps(doc))
+    packed_entry, scaled, remote = GltfReader().read(path)
+    maps = packed_entry.material.textures
+    assert set(maps) == {"base_color", "roughness", "metallic"}
+    assert (maps["roughness"].channel, maps["metallic"].channel, maps["base_color"].channel) == (1, 2, None)
+    assert maps["roughness"].filter == "nearest" and maps["base_color"].colorspace == "srgb"
+    assert maps["roughness"].file == str((tmp_path / "orm.png").resolve())
+    assert os.path.dirname(maps["base_color"].file) == str(tmp_path / "cache" / "brdfremap" / "gltf-images")
+    from brdfremap.core.data.textures import read_values
+    assert np.allclose(read_values(maps["roughness"], "scalar")[0], np.round(np.linspace(0, 1, 16) * 255) / 255)
+    assert np.allclose(read_values(maps["metallic"], "scalar")[0], 1 - np.round(np.linspace(0, 1, 16) * 255) / 255)
+    assert set(scaled.material.textures) == {"roughness"}  # its metallic is 0.5 x the texture: read as the factor
+    assert any("metallicFactor 0.5" in n for n in scaled.notes)
+    assert remote.material.textures == {} and any("https://x/y.png" in n for n in remote.notes)  # never fetched
+    _glb(doc, tmp_path / "m.glb", [base64.b64decode(colour.partition(",")[2]), (tmp_path / "orm.png").read_bytes()])
+    glb = GltfReader().read(tmp_path / "m.glb")[0].material.textures  # its images in the binary chunk
+    assert {k: t.sha256 for k, t in glb.items()} == {k: t.sha256 for k, t in maps.items()}
+
+
+def _glb(doc: dict, path, images: list[bytes]) -> None:
+    """``doc`` as a .glb whose images are buffer views of its binary chunk (glTF 2.0's GLB layout)."""
+    import struct
+
+    blob, views = b"", []
+    for data in images:
+        views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(data)})
+        blob += data + b"\0" * (-len(data) % 4)
+    doc = {**doc, "bufferViews": views, "buffers": [{"byteLength": len(blob)}],
+           "images": [{"bufferView": i, "mimeType": "image/png"} for i in range(len(images))]}
+    text = json.dumps(doc).encode()
+    text += b" " * (-len(text) % 4)
+    body = struct.pack("<I4s", len(text), b"JSON") + text + struct.pack("<I4s", len(blob), b"BIN\0") + blob
+    path.write_bytes(struct.pack("<4sII", b"glTF", 2, 12 + len(body)) + body)
+
+
+GLTF_TABLE = ROOT / "configs" / "tables" / "built" / "threejs-gltf-to-cycles-principled.json"
+EXPORT = """
+import bpy, sys
+bpy.ops.wm.read_factory_settings(use_empty=True)
+m = bpy.data.materials.new("worn copper")
+m.use_nodes = True
+nt = m.node_tree
+p = next(n for n in nt.nodes if n.type == "BSDF_PRINCIPLED")
+for file, socket, space in ((sys.argv[1] + "/worn-copper-colour.png", "Base Color", "sRGB"),
+                            (sys.argv[1] + "/worn-copper-roughness.png", "Roughness", "Non-Color")):
+    n = nt.nodes.new("ShaderNodeTexImage")
+    n.image = bpy.data.images.load(file)
+    n.image.colorspace_settings.name = space
+    nt.links.new(n.outputs["Color"], p.inputs[socket])
+p.inputs["Metallic"].default_value = 1.0
+bpy.ops.mesh.primitive_uv_sphere_add()
+bpy.context.active_object.data.materials.append(m)
+bpy.ops.export_scene.gltf(filepath=sys.argv[2], export_format="GLB")
+"""
+
+
+def test_a_glb_from_blenders_exporter_converts_to_cycles_texel_by_texel(tmp_path, cycles_adapter, three,
+                                                                        monkeypatch):
+    """A textured Principled BSDF exported by Blender's own glTF exporter (its roughness packed in the
+    metallicRoughness image's green, the images inside the .glb) read back and remapped to Cycles
+    through the shipped table: its maps are the table's, and its textured check is rendered."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    glb = tmp_path / "worn-copper.glb"
+    out = subprocess.run([sys.executable, "-c", EXPORT, str(ROOT / "examples" / "library" / "textures"), str(glb)],
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0 and glb.is_file(), out.stderr[-2000:]
+    (entry,) = GltfReader().read(glb)
+    assert set(entry.material.textures) == {"base_color", "metallic", "roughness"}
+    proc = remap("convert", glb, "--to", "cycles:principled", "--table", GLTF_TABLE, "--out", tmp_path / "out",
+                 *QUICK, env={"XDG_CACHE_HOME": str(tmp_path / "cache")})
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    row = json.loads((tmp_path / "out" / "convert.json").read_text())["materials"][0]
+    assert row["status"] not in ("failed", "unsupported"), row
+    record = json.loads((tmp_path / "out" / "materials" / row["slot"] / "result.json").read_text())["textures"]
+    assert record["table"] == "three.js glTF PBR -> Cycles Principled" and (record["width"], record["height"]) == (256, 256)
+    assert {"base_color", "metallic", "roughness"} <= {m["param"] for m in record["maps"]}
+    assert {c["condition"] for c in record["checks"]} == {"scene", "environment"}
+    assert all(c["error"] < 0.15 for c in record["checks"]), record["checks"]
+    assert (tmp_path / "out" / "library.blend").is_file()
