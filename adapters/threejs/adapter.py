@@ -62,7 +62,7 @@ class ThreeJsAdapter(Adapter):
                     "(`make test` and `make demo` do both)")
     models = MODELS
     light_types = frozenset({"point", "environment"})
-    version = "1"
+    version = "2"  # 2: the probe sphere has tangents (anisotropy turned from a frame three.js made from screen derivatives)
     textures = True
     calibration = ("gltf_pbr", {"base_color": 0.8, "metallic": 0.0, "roughness": 1.0, "specular": 0.0})
     transmission_limit = ("three.js's transmission is screen-space, by design: a glass shows a blurred copy of what "

@@ -16,6 +16,7 @@ import http.server
 import shutil
 import threading
 import time
+import urllib.parse
 from pathlib import Path
 from typing import Any
 
@@ -89,6 +90,7 @@ class Page:
             self._pw = sync_playwright().start()
             self._browser = self._pw.chromium.launch(executable_path=exe, args=ARGS)
             page = self._browser.new_page()
+            page.route("**/*", functools.partial(_only_from, f"127.0.0.1:{self._server.server_port}"))
             page.on("console", lambda m: self._console.append(f"{m.type}: {m.text}"))
             page.on("pageerror", lambda e: self._console.append(f"page error: {e}"))
             page.goto(f"http://127.0.0.1:{self._server.server_port}/index.html", timeout=START_TIMEOUT_MS)
@@ -161,6 +163,15 @@ class Page:
             self._server.shutdown()
             self._server.server_close()
             self._server = None
+
+
+def _only_from(host: str, route) -> None:
+    """The page loads from its own server and nowhere else: a URI in a glTF (an image's, a buffer's)
+    is never fetched from a network."""
+    if urllib.parse.urlparse(route.request.url).netloc == host:
+        route.continue_()
+    else:
+        route.abort()
 
 
 def _first(exc: BaseException) -> str:

@@ -1,12 +1,15 @@
-"""A glTF's images as files a texture can name: an image file beside the `.gltf` as it is; an image
-embedded in the file (a data URI, or a buffer view of a `.glb`'s binary chunk) written once, by its
-content, to `$XDG_CACHE_HOME/brdfremap/gltf-images/` (so a run that is interrupted and started again
-names the same file, and its jobs resume). Only PNG and JPEG images are taken, by their first bytes;
-nothing in a glTF is run."""
+"""A glTF's images as files a texture can name: an image file beside the `.gltf` (a relative URI) as
+it is; an image embedded in the file (a data URI, or a buffer view of a data-URI buffer, a buffer
+file beside it, or a `.glb`'s binary chunk) written once, by its content, to
+`$XDG_CACHE_HOME/brdfremap/gltf-images/` (so a run that is interrupted and started again names the
+same file, and its jobs resume). Only regular files are read, only the bytes a buffer view names,
+and only PNG and JPEG images are taken, by their first bytes; nothing is fetched from a network and
+nothing in a glTF is run. A malformed entry is a ConfigError naming its field."""
 
 from __future__ import annotations
 
 import base64
+import binascii
 import hashlib
 import os
 import urllib.parse
@@ -21,81 +24,113 @@ MAGIC = {b"\x89PNG\r\n\x1a\n": ".png", b"\xff\xd8\xff": ".jpg"}
 
 
 def cache_folder() -> Path:
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    """$XDG_CACHE_HOME/brdfremap/gltf-images (a relative XDG_CACHE_HOME is ignored, as the XDG spec says)."""
+    base = os.environ.get("XDG_CACHE_HOME", "")
+    if not os.path.isabs(base):
+        base = os.path.join(os.path.expanduser("~"), ".cache")
     return Path(base) / "brdfremap" / "gltf-images"
 
 
 def image_file(doc: dict[str, Any], blob: bytes | None, folder: Path, index: int) -> Path:
     """The file of image ``index`` of this document (``folder``: the `.gltf`'s; ``blob``: a `.glb`'s
     binary chunk); a ConfigError saying why when it has none."""
-    images = doc.get("images") or []
-    if not 0 <= index < len(images):
-        raise ConfigError(f"image {index} is not in the file")
-    image = images[index]
+    image = item(doc, "images", index)
+    field = f"images[{index}]"
     uri = image.get("uri")
-    scheme = urllib.parse.urlparse(uri).scheme if isinstance(uri, str) else "data"
-    if scheme != "data":
-        if scheme:
-            raise ConfigError(f"image {index} is at {uri!r}: only files beside the glTF and embedded images are read")
-        path = (folder / urllib.parse.unquote(uri)).resolve()
-        if not path.is_file():
-            raise ConfigError(f"image {index}'s file {path} is not there")
+    if uri is not None and not isinstance(uri, str):
+        raise ConfigError(f"{field}.uri is not a string")
+    if isinstance(uri, str) and _scheme(uri, field) != "data":
+        path = _local(folder, uri, f"{field}.uri")
+        _kind(_read(path, 0, len(max(MAGIC, key=len)), f"{field}.uri"), field)
         return path
-    data = _data_uri(uri, index) if isinstance(uri, str) else _buffer_view(doc, blob, folder, image, index)
-    suffix = next((s for magic, s in MAGIC.items() if data[:len(magic)] == magic), None)
-    if suffix is None:
-        raise ConfigError(f"image {index} is neither a PNG nor a JPEG")
+    data = _data_uri(uri, f"{field}.uri") if isinstance(uri, str) else _buffer_view(doc, blob, folder, image, index)
+    suffix = _kind(data, field)
     path = cache_folder() / f"{hashlib.sha256(data).hexdigest()}{suffix}"
     if not path.is_file():
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             write_bytes_atomic(path, data)
         except OSError as exc:
-            raise ConfigError(f"cannot write image {index} to {path.parent}: {exc.strerror or exc} "
+            raise ConfigError(f"cannot write {field} to {path.parent}: {exc.strerror or exc} "
                               "(set XDG_CACHE_HOME to a writable folder)") from None
     return path
 
 
-def _data_uri(uri: str, index: int) -> bytes:
+def item(doc: dict[str, Any], key: str, index: Any) -> dict[str, Any]:
+    """Entry ``index`` of the document's array ``key`` (an object), or a ConfigError naming it."""
+    items = doc.get(key)
+    if not isinstance(index, int) or not isinstance(items, list) or not 0 <= index < len(items) \
+            or not isinstance(items[index], dict):
+        raise ConfigError(f"{key}[{index}] is not in the file")
+    return items[index]
+
+
+def _scheme(uri: str, field: str) -> str:
+    parsed = urllib.parse.urlparse(uri)
+    if parsed.scheme == "data":
+        return "data"
+    if parsed.scheme or parsed.netloc:
+        raise ConfigError(f"{field} is {uri[:80]!r}: only files beside the glTF and embedded data are read "
+                          "(nothing is fetched)")
+    return ""
+
+
+def _local(folder: Path, uri: str, field: str) -> Path:
+    """A relative URI's file: a regular file (not a device, a pipe or a folder)."""
+    path = (folder / urllib.parse.unquote(uri)).resolve()
+    if not path.is_file():
+        raise ConfigError(f"{field}: {path} is not a file")
+    return path
+
+
+def _read(path: Path, start: int, length: int, field: str) -> bytes:
+    try:
+        with open(path, "rb") as f:
+            f.seek(start)
+            return f.read(length)
+    except OSError as exc:
+        raise ConfigError(f"{field}: cannot read {path}: {exc.strerror or exc}") from None
+
+
+def _kind(data: bytes, field: str) -> str:
+    suffix = next((s for magic, s in MAGIC.items() if data[:len(magic)] == magic), None)
+    if suffix is None:
+        raise ConfigError(f"{field} is neither a PNG nor a JPEG image")
+    return suffix
+
+
+def _data_uri(uri: str, field: str) -> bytes:
     head, _, body = uri.partition(",")
-    if not head.endswith(";base64"):
-        raise ConfigError(f"image {index}'s data URI is not base64")
+    if not head.lower().endswith(";base64"):
+        raise ConfigError(f"{field} is a data URI that is not base64")
     try:
         return base64.b64decode(body, validate=True)
-    except ValueError:
-        raise ConfigError(f"image {index}'s data URI is not valid base64") from None
+    except (ValueError, binascii.Error):
+        raise ConfigError(f"{field} is not valid base64") from None
 
 
 def _buffer_view(doc: dict[str, Any], blob: bytes | None, folder: Path, image: dict[str, Any], index: int) -> bytes:
-    views = doc.get("bufferViews") or []
+    """The bytes a buffer view names, and no more."""
     i = image.get("bufferView")
-    if not isinstance(i, int) or not 0 <= i < len(views):
-        raise ConfigError(f"image {index} has neither a URI nor a buffer view")
-    view = views[i]
-    buffers = doc.get("buffers") or []
-    b = view.get("buffer", 0)
-    if not isinstance(b, int) or not 0 <= b < len(buffers):
-        raise ConfigError(f"image {index}'s buffer view {i} names no buffer")
-    data = _buffer(buffers[b].get("uri"), blob, folder, index)
-    start = int(view.get("byteOffset", 0))  # a buffer view's offset and length are the glTF's own
-    out = data[start:start + int(view.get("byteLength", 0))]
-    if len(out) != int(view.get("byteLength", 0)):
-        raise ConfigError(f"image {index}'s buffer view {i} runs past its buffer")
-    return out
-
-
-def _buffer(uri: Any, blob: bytes | None, folder: Path, index: int) -> bytes:
-    """A buffer's bytes: a data URI's, a file's beside the glTF, or (no URI) a `.glb`'s binary chunk."""
-    if not isinstance(uri, str):
-        if blob is None:
-            raise ConfigError(f"image {index} is in a buffer of no URI, and the file has no binary chunk")
-        return blob
-    scheme = urllib.parse.urlparse(uri).scheme
-    if scheme == "data":
-        return _data_uri(uri, index)
-    if scheme:
-        raise ConfigError(f"image {index} is in a buffer at {uri!r}: only files beside the glTF are read")
-    try:
-        return (folder / urllib.parse.unquote(uri)).read_bytes()
-    except OSError as exc:
-        raise ConfigError(f"image {index}'s buffer {uri!r} cannot be read: {exc.strerror or exc}") from None
+    if i is None:
+        raise ConfigError(f"images[{index}] has neither a uri nor a bufferView")
+    view = item(doc, "bufferViews", i)
+    field = f"bufferViews[{i}]"
+    b, start, length = view.get("buffer"), view.get("byteOffset", 0), view.get("byteLength")
+    if not all(isinstance(x, int) and not isinstance(x, bool) and x >= 0 for x in (b, start, length)):
+        raise ConfigError(f"{field}: buffer, byteOffset and byteLength must be whole numbers of at least 0")
+    buffer = item(doc, "buffers", b)
+    uri = buffer.get("uri")
+    if uri is None:
+        if b != 0 or blob is None:
+            raise ConfigError(f"buffers[{b}] has no uri, and only a .glb's first buffer may (its binary chunk)")
+        data = blob[start:start + length]
+    elif not isinstance(uri, str):
+        raise ConfigError(f"buffers[{b}].uri is not a string")
+    elif _scheme(uri, f"buffers[{b}].uri") == "data":
+        data = _data_uri(uri, f"buffers[{b}].uri")[start:start + length]
+    else:
+        data = _read(_local(folder, uri, f"buffers[{b}].uri"), start, length, f"buffers[{b}].uri")
+    if len(data) != length:
+        raise ConfigError(f"{field} runs past the end of buffers[{b}]")
+    return data

@@ -7,6 +7,7 @@ from __future__ import annotations
 import base64
 import json
 import math
+import urllib.parse
 from pathlib import Path
 from typing import Any
 
@@ -76,7 +77,8 @@ def sphere_document(materials: list[tuple[str, dict[str, Value]]], spec: ModelSp
     maps = maps or [{} for _ in materials]
     mats = [gltf.material(name, spec.complete(params), spec) for name, params in materials]
     turned = [bool(m.get("extensions", {}).get("KHR_materials_anisotropy")) for m in mats]
-    mesh = {k: v for k, v in sphere_mesh().items() if (k != "TEXCOORD_0" or any(maps)) and (k != "TANGENT" or any(turned))}
+    mesh = {k: v for k, v in sphere_mesh().items()
+            if (k != "TEXCOORD_0" or any(maps)) and (k != "TANGENT" or any(turned))}
     blob, views, accessors, attributes, indices = _mesh_parts(mesh)
     def used(i: int) -> dict[str, int]:  # tangents only where anisotropy turns from them, UVs where a texture is
         return {k: v for k, v in attributes.items() if (k != "TANGENT" or turned[i]) and (k != "TEXCOORD_0" or maps[i])}
@@ -101,25 +103,29 @@ def sphere_document(materials: list[tuple[str, dict[str, Value]]], spec: ModelSp
 
 def material_document(doc: dict[str, Any], index: int) -> dict[str, Any]:
     """One material of a glTF document, alone in a document of its own (as the adapter renders one),
-    with the textures, images and samplers it reads, numbered anew."""
+    with the textures, images and samplers it reads, numbered anew. Its images must be embedded as
+    data URIs (as this tool writes them): the page reads nothing else."""
     mat = json.loads(json.dumps(doc["materials"][index]))
     out: dict[str, Any] = {"asset": {"version": "2.0"}, "materials": [mat]}
     refs = _texture_refs(mat)
     if refs:
-        images, samplers, texs = [], [], []
+        imgs, samplers, texs = [], [], []
         for ref in refs:
             tex = dict(doc["textures"][ref["index"]])
-            for key, pool, into in (("source", doc.get("images", []), images),
+            for key, pool, into in (("source", doc.get("images", []), imgs),
                                     ("sampler", doc.get("samplers", []), samplers)):
                 if key in tex:
                     item = pool[tex[key]]
+                    if key == "source" and urllib.parse.urlparse(str(item.get("uri", ""))).scheme != "data":
+                        raise ConfigError(f"images[{tex[key]}] is not embedded as a data URI: render the file's "
+                                          "materials as this tool writes them")
                     if item not in into:
                         into.append(item)
                     tex[key] = into.index(item)
             if tex not in texs:
                 texs.append(tex)
             ref["index"] = texs.index(tex)
-        out.update(textures=texs, images=images, samplers=samplers)
+        out.update(textures=texs, images=imgs, samplers=samplers)
     used = sorted(mat.get("extensions", {}))
     if used:
         out["extensionsUsed"] = used
@@ -181,8 +187,19 @@ class GltfReader:
         return [self._entry(m, i, Path(path), doc, blob) for i, m in enumerate(doc.get("materials") or [])]
 
     @staticmethod
-    def _entry(m: dict[str, Any], i: int, path: Path, doc: dict[str, Any], blob: bytes | None) -> Entry:
-        name = m.get("name") or f"material {i}"
+    def _entry(m: Any, i: int, path: Path, doc: dict[str, Any], blob: bytes | None) -> Entry:
+        """One material's entry; a malformed one (a factor that is not a number ...) is an entry that
+        cannot be converted, saying which and why, so the file's other materials still are."""
+        name = m.get("name") if isinstance(m, dict) and isinstance(m.get("name"), str) and m["name"] else \
+            f"material {i}"
+        try:
+            return GltfReader._read_entry(m, name, path, doc, blob)
+        except (TypeError, ValueError, AttributeError) as exc:
+            return Entry(name=name, file=str(path), problem=f"materials[{i}] is malformed glTF ({_first_line(exc)}): "
+                                                            "check it with the Khronos glTF validator")
+
+    @staticmethod
+    def _read_entry(m: dict[str, Any], name: str, path: Path, doc: dict[str, Any], blob: bytes | None) -> Entry:
         params, notes, textured = gltf.read_material(m)
         spec = MODELS["gltf_pbr"]
         clipped = {k: spec.param(k).clip(tuple(v) if isinstance(v, (list, tuple)) else v) for k, v in params.items()}
@@ -201,19 +218,41 @@ def _maps(m: dict[str, Any], doc: dict[str, Any], blob: bytes | None, path: Path
     out: dict[str, Texture] = {}
     for param, (index, channel) in wanted.items():
         try:
-            texs = doc.get("textures") or []
-            tex = texs[index] if 0 <= index < len(texs) else None
-            if tex is None or not isinstance(tex.get("source"), int):
-                raise ConfigError(f"texture {index} has no image glTF 2.0 reads")
-            file = images.image_file(doc, blob, path.parent, tex["source"])
-            samplers, which = doc.get("samplers") or [], tex.get("sampler")
-            sampler = samplers[which] if isinstance(which, int) and 0 <= which < len(samplers) else {}
-            filt = Filter.NEAREST if sampler.get("magFilter") == textures.NEAREST else Filter.LINEAR
-            space = ColourSpace.SRGB if channel is None else ColourSpace.LINEAR
-            out[param] = texture(file, space, filt, channel=channel, where=f"{name}: {param}")
+            out[param] = _map(doc, blob, path, index, channel, f"{name}: {param}")
         except ConfigError as exc:
             notes.append(f"{param}: {exc}: read as its factor")
     return out, notes
+
+
+def _map(doc: dict[str, Any], blob: bytes | None, path: Path, index: int, channel: int | None,
+         where: str) -> Texture:
+    """Texture ``index`` as a texture of one parameter: its image's file, its sampler's filter; a
+    grey image's one channel wherever glTF reads a channel of it (a viewer expands grey to RGB)."""
+    tex = images.item(doc, "textures", index)
+    file = images.image_file(doc, blob, path.parent, tex.get("source"))
+    which = tex.get("sampler")
+    sampler = images.item(doc, "samplers", which) if which is not None else {}
+    filt = Filter.NEAREST if sampler.get("magFilter") == textures.NEAREST else Filter.LINEAR
+    if channel is not None and _channels(file) < 3:
+        channel = 0
+    space = ColourSpace.SRGB if channel is None else ColourSpace.LINEAR
+    return texture(file, space, filt, channel=channel, where=where)
+
+
+def _channels(file: Path) -> int:
+    import OpenImageIO as oiio
+
+    inp = oiio.ImageInput.open(str(file))
+    if inp is None:
+        raise ConfigError(f"cannot read the image: {oiio.geterror() or 'not an image'}", file=str(file))
+    try:
+        return int(inp.spec().nchannels)
+    finally:
+        inp.close()
+
+
+def _first_line(exc: BaseException) -> str:
+    return (str(exc).strip().splitlines() or [type(exc).__name__])[0]
 
 
 def _shown(v: Value) -> str:

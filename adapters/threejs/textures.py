@@ -62,7 +62,8 @@ def embed(doc: dict[str, Any], material: dict[str, Any], maps: dict[str, Texture
 
 def _packed(maps: dict[str, TextureMap], pbr: dict[str, Any]) -> tuple[np.ndarray, str]:
     """One H x W x 3 image: red 1 (glTF's occlusion channel, unread here), green the roughness, blue
-    the metallic; a constant one's channel 1 (its factor stays)."""
+    the metallic; a constant one's channel 1 (its factor stays). One image has one sampler: nearest
+    when either map is (a map of distinct texels stays so), else linear."""
     given = [maps[n] for n in PACKED if n in maps]
     h = max(m.values.shape[0] for m in given)
     w = max(m.values.shape[1] for m in given)
@@ -72,14 +73,14 @@ def _packed(maps: dict[str, TextureMap], pbr: dict[str, Any]) -> tuple[np.ndarra
             v = maps[name].values
             out[..., channel] = v if v.shape[:2] == (h, w) else resized(v, w, h)
             pbr[factor] = 1.0
-    return out, given[0].filter
+    return out, Filter.NEAREST if any(m.filter == Filter.NEAREST for m in given) else Filter.LINEAR
 
 
 def _texture(doc: dict[str, Any], png: bytes, filt: str) -> int:
     images, textures, samplers = (doc.setdefault(k, []) for k in ("images", "textures", "samplers"))
     sampler = SAMPLERS[Filter(filt)]
     if sampler not in samplers:
-        samplers.append(sampler)
+        samplers.append(dict(sampler))
     images.append({"mimeType": "image/png", "uri": "data:image/png;base64," + base64.b64encode(png).decode()})
     textures.append({"sampler": samplers.index(sampler), "source": len(images) - 1})
     return len(textures) - 1

@@ -181,6 +181,8 @@ def encode(values: np.ndarray, suffix: str, colorspace: str, *, bits: int = 16) 
 
     import OpenImageIO as oiio
 
+    if bits not in (8, 16):
+        raise ValueError(f"a PNG map is written in 8 or 16 bits, not {bits}")
     arr = values[..., None] if values.ndim == 2 else values
     arr = np.ascontiguousarray(arr, np.float32)
     if colorspace == ColourSpace.SRGB:
@@ -201,3 +203,13 @@ def encode(values: np.ndarray, suffix: str, colorspace: str, *, bits: int = 16) 
         if not (out.close() and ok):
             raise ConfigError(f"cannot write a texture: {oiio.geterror()}")
         return path.read_bytes()
+
+
+def decode(data: bytes, suffix: str, colorspace: str, kind: str) -> np.ndarray:
+    """A map's file, as `encode` wrote it, read back to its linear values (as a renderer reads the file)."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="brdfremap-") as tmp:
+        path = Path(tmp) / f"map{suffix}"
+        path.write_bytes(data)
+        return read_values(Texture(file=str(path), colorspace=colorspace), kind)  # type: ignore[arg-type]

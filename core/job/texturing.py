@@ -18,7 +18,7 @@ from ..data.errors import RenderError
 from ..data.metrics import beyond_noise, delta_e_itp, relative_rmse
 from ..data.model import Strict
 from ..data.scene import Lighting, ProbeScene
-from ..data.textures import Texture, TextureMap, encode, kind_of_file
+from ..data.textures import Texture, TextureMap, decode, encode, kind_of_file
 from ..host.protocol import Adapter, check_image
 from ..data.schemas import ParamKind
 
@@ -105,7 +105,7 @@ def texture_result(resolved, source: Adapter | None, target: Adapter, params: di
     native_params = {**params, **{n: spec.param(n).clip(v) for n, v in numbers.items()}}
     maps = {n: m for n, m in out.maps.items() if n not in held}
     filt = next(iter(job.source.textures.values())).filter
-    files, native, records = {}, {}, []
+    files, native, records, written = {}, {}, [], {}
     for name, values in maps.items():
         p = spec.param(name)
         suffix, space = kind_of_file(p.lower, p.upper, p.kind == ParamKind.RGB)
@@ -114,9 +114,11 @@ def texture_result(resolved, source: Adapter | None, target: Adapter, params: di
         native[name] = Texture(file=fname, colorspace=space, filter=filt)  # type: ignore[arg-type]
         records.append(MapRecord(param=name, file=fname, colorspace=space, low=float(values.min()),
                                  high=float(values.max())))
+        if source is not None:  # the check renders the maps as written (a 16-bit PNG's values), not as computed
+            written[name] = decode(files[fname], suffix, space, p.kind)
     seconds = time.perf_counter() - t0
     checks, skipped, images = ([], "not rendered (--no-render)", None) if source is None else \
-        _check(resolved, source, target, inputs, maps, native_params, filt)
+        _check(resolved, source, target, inputs, written, native_params, filt)
     record = Textured(table=table.name, inputs={n: t.file for n, t in job.source.textures.items()},
                       width=inputs.width, height=inputs.height, maps=records, constants=out.constants,
                       values=_plain(spec.active(native_params)), held=held,

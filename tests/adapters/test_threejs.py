@@ -237,6 +237,53 @@ def _srgb8(v: float) -> float:
     return ((e + 0.055) / 1.055) ** 2.4 if e > 0.04045 else e / 12.92
 
 
+def test_the_written_sphere_has_the_probes_texture_coordinates_and_tangents():
+    from brdfremap.adapters.threejs.library import sphere_mesh
+
+    m = sphere_mesh()
+    pos, uv, tangent = m["POSITION"], m["TEXCOORD_0"], m["TANGENT"]
+    front = np.argmin(np.linalg.norm(pos - [0, 0, 1], axis=1))  # facing a viewer on +z: u 0.75, v 0.5
+    assert np.allclose(uv[front], [0.75, 0.5], atol=1e-6) and np.allclose(tangent[front], [1, 0, 0, 1], atol=1e-6)
+    right = np.argmin(np.linalg.norm(pos - [1, 0, 0], axis=1))  # +x: u 0 (or 1, the seam), v 0.5
+    assert uv[right][0] in (0.0, 1.0) and uv[right][1] == pytest.approx(0.5)
+    assert np.all(uv[pos[:, 1] > 0.9999][:, 1] < 1e-6)  # the top pole at v = 0, an image's top row
+    tri = m["indices"].reshape(-1, 3)[1000]  # counter-clockwise seen from outside: its normal outward
+    a, b, c = pos[tri]
+    assert np.dot(np.cross(b - a, c - a), a + b + c) > 0
+
+
+def test_anisotropy_turns_the_same_way_on_a_textured_sphere(three):
+    """A textured sphere's tangent frame is the plain sphere's (its v is turned over for glTF's images,
+    which without tangents of its own would mirror an anisotropy's rotation)."""
+    spec = three.models["gltf_pbr"]
+    given = {"base_color": 0.9, "metallic": 1.0, "roughness": 0.4, "anisotropy": 0.7, "anisotropy_rotation": 0.125}
+    q = _srgb8(0.9)
+    plain = three.render("gltf_pbr", spec.complete({**given, "base_color": q}), TEX_SCENE)
+    textured = three.render_textured("gltf_pbr", given, {"base_color": TextureMap(np.full((4, 4, 3), 0.9, np.float32))},
+                                     TEX_SCENE)
+    mirrored = three.render("gltf_pbr", spec.complete({**given, "base_color": q, "anisotropy_rotation": 0.875}),
+                            TEX_SCENE)
+    assert relative_rmse(plain, mirrored) > 0.05  # the rotation shows
+    assert relative_rmse(plain, textured) < 0.01
+
+
+@pytest.mark.parametrize("anisotropic, rotation", [(0.5, 0.0), (0.8, 0.0), (0.5, 0.125)])
+def test_an_anisotropic_metal_renders_as_in_cycles_through_the_appearance(three, cycles_adapter, anisotropic,
+                                                                          rotation):
+    """Blender's anisotropic Principled metal, turned into glTF's KHR_materials_anisotropy by the
+    appearance (the two α's ratio), renders in three.js as in Cycles: within 5 % (the isotropic one is
+    2.1 % apart). The sphere's tangents make it so: three.js's own frame (from the texture coordinates'
+    screen derivatives) rendered these 65-79 % off, twice the light."""
+    scene = ProbeScene().overridden(resolution=64, spp=256)
+    cp = cycles_adapter.models["principled"].complete({"base_color": 0.9, "metallic": 1.0, "roughness": 0.4,
+                                                       "anisotropic": anisotropic,
+                                                       "anisotropic_rotation": rotation})
+    tp = three.models["gltf_pbr"].complete(three.from_appearance("gltf_pbr",
+                                                                 cycles_adapter.appearance("principled", cp), {}))
+    assert tp["anisotropy"] > 0.3 and tp["anisotropy_rotation"] == pytest.approx(rotation)
+    assert relative_rmse(cycles_adapter.render("principled", cp, scene), three.render("gltf_pbr", tp, scene)) < 0.05
+
+
 def test_a_constant_texture_renders_as_its_8_bit_value(three):
     spec = three.models["gltf_pbr"]
     given = {"base_color": 0.6, "metallic": 1.0, "roughness": 0.45}
@@ -257,7 +304,9 @@ def _textured_materials():
     return [("plain gold", {"base_color": (1.0, 0.77, 0.34), "metallic": 1.0, "roughness": 0.3}, {}),
             ("worn", {"base_color": 0.5, "metallic": 1.0, "roughness": 0.5, "ior": 1.6},
              {"base_color": TextureMap(_checker(seed=2, rows=4, cols=8, texel=8)), "roughness": TextureMap(ramp),
-              "metallic": TextureMap(np.where(ramp > 0.5, 1.0, 0.0).astype(np.float32), "nearest")})]
+              "metallic": TextureMap(np.where(ramp > 0.5, 1.0, 0.0).astype(np.float32), "nearest")}),
+            ("rough print", {"base_color": 0.5, "metallic": 0.0, "roughness": 0.6},
+             {"base_color": TextureMap(_checker(seed=3, rows=4, cols=8, texel=8), "nearest")})]
 
 
 def test_a_textured_gltf_validates_and_renders_as_its_textured_check(three, tmp_path):
@@ -270,10 +319,16 @@ def test_a_textured_gltf_validates_and_renders_as_its_textured_check(three, tmp_
     assert issues["numErrors"] == issues["numWarnings"] == issues["numInfos"] == 0, issues["messages"]
     worn = doc["materials"][1]["pbrMetallicRoughness"]
     assert worn["baseColorFactor"] == [1.0, 1.0, 1.0, 1.0] and worn["roughnessFactor"] == worn["metallicFactor"] == 1.0
-    assert len(doc["images"]) == 2 and "baseColorTexture" not in doc["materials"][0]["pbrMetallicRoughness"]
+    assert len(doc["images"]) == 3 and "baseColorTexture" not in doc["materials"][0]["pbrMetallicRoughness"]
     assert "TEXCOORD_0" not in doc["meshes"][0]["primitives"][0]["attributes"]  # only where a texture is read
+    assert doc["materials"][2]["pbrMetallicRoughness"]["baseColorTexture"]["index"] == 2
+    samplers = [doc["samplers"][t["sampler"]]["magFilter"] for t in doc["textures"]]
+    assert samplers == [9729, 9728, 9728]  # linear; nearest where either packed map is; nearest
     for i, (name, params, maps) in enumerate(mats):
         alone = material_document(json.loads(path.read_text()), i)
+        assert len(alone.get("images", [])) == (2 if "roughness" in maps else len(maps)), name  # its own, numbered anew
+        assert all(t["source"] < len(alone["images"]) and t["sampler"] < len(alone["samplers"])
+                   for t in alone.get("textures", []))
         want = three.render_textured("gltf_pbr", params, maps, TEX_SCENE) if maps else \
             three.render("gltf_pbr", spec.complete(params), TEX_SCENE)
         assert np.array_equal(three.render_document(alone, TEX_SCENE), want), name
@@ -294,7 +349,7 @@ def test_blender_imports_a_textured_gltf_with_its_images(tmp_path, cycles_adapte
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr[-2000:]
     assert "LINKED ['Base Color', 'Metallic', 'Roughness']" in out.stdout, out.stdout[-2000:]
-    assert "IMAGES [(64, 32), (64, 32)]" in out.stdout, out.stdout[-2000:]
+    assert "IMAGES [(64, 32), (64, 32), (64, 32)]" in out.stdout, out.stdout[-2000:]
 
 
 TABLE = ROOT / "configs" / "tables" / "built" / "mitsuba-roughconductor-to-threejs-gltf.json"
@@ -436,3 +491,36 @@ def test_a_glb_from_blenders_exporter_converts_to_cycles_texel_by_texel(tmp_path
     assert {c["condition"] for c in record["checks"]} == {"scene", "environment"}
     assert all(c["error"] < 0.15 for c in record["checks"]), record["checks"]
     assert (tmp_path / "out" / "library.blend").is_file()
+
+
+def test_a_malformed_or_hostile_gltf_is_said_per_material_and_never_read_past_its_images(tmp_path, monkeypatch):
+    """Each bad texture is a note naming its field, a malformed material an entry that cannot convert
+    (the file's others still do); a device, a text file or a second buffer without a URI is not read
+    as an image."""
+    import base64
+
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    (tmp_path / "notes.txt").write_text("not an image")
+    png = _png(np.full((2, 2, 3), 0.5, np.float32))
+    doc = {"asset": {"version": "2.0"},
+           "buffers": [{"byteLength": len(png), "uri": "data:application/octet-stream;base64," +
+                        base64.b64encode(png).decode()}, {"byteLength": 4}, {"uri": "/dev/zero", "byteLength": 8}],
+           "bufferViews": [{"buffer": 1, "byteLength": 4}, {"buffer": 0, "byteOffset": 64, "byteLength": 4096},
+                           {"buffer": 2, "byteLength": 8}, {"buffer": 0, "byteLength": len(png)}],
+           "images": [{"uri": "notes.txt"}, {"bufferView": 0}, {"bufferView": 1}, {"bufferView": 2},
+                      {"uri": "file:///etc/passwd"}, {"bufferView": 3}],
+           "textures": [{"source": i} for i in range(6)],
+           "materials": [{"name": f"m{i}", "pbrMetallicRoughness": {"baseColorTexture": {"index": i}}}
+                         for i in range(6)] + [{"name": "bad", "pbrMetallicRoughness": {"baseColorFactor": [0.5]}}]}
+    path = tmp_path / "hostile.gltf"
+    path.write_text(json.dumps(doc))
+    entries = GltfReader().read(path)
+    said = {e.name: " ".join(e.notes) + e.problem for e in entries}
+    assert "images[0] is neither a PNG nor a JPEG" in said["m0"]
+    assert "buffers[1] has no uri" in said["m1"]
+    assert "bufferViews[1] runs past the end of buffers[0]" in said["m2"]
+    assert "buffers[2].uri: /dev/zero is not a file" in said["m3"]
+    assert "nothing is fetched" in said["m4"]
+    assert [e.name for e in entries if e.material and e.material.textures] == ["m5"]  # the one good image
+    bad = entries[-1]
+    assert bad.material is None and "materials[6] is malformed glTF" in bad.problem

@@ -20,18 +20,25 @@ const environments = new Map();
 const spheres = new Map();
 const targets = new Map();
 
-// The probe sphere. A textured one has the probe's texture coordinates (core/data/textures.py:
-// u = phi / 2pi from +x, increasing away from a viewer on +z; v = theta / pi from the top pole, an
-// image's top row at v = 0, as glTF reads images): three.js's sphere begun half a turn round (its
-// vertices are the same), its v turned over.
+// The probe sphere, with tangents along its latitudes (d position / d phi; the bitangent up), as a
+// written file's sphere has (TANGENT) and as glTF asks a viewer to make them where a file has none:
+// anisotropy turns from them. (Without them three.js derives a frame from the texture coordinates'
+// screen-space derivatives, neither unit nor orthogonal on a sphere.) A textured sphere has the
+// probe's texture coordinates (core/data/textures.py: u = phi / 2pi from +x, increasing away from a
+// viewer on +z; v = theta / pi from the top pole, an image's top row at v = 0, as glTF reads
+// images): three.js's sphere begun half a turn round (its vertices are the same), its v turned over.
 function sphere(radius, textured) {
   const key = `${radius} ${textured}`;
   if (!spheres.has(key)) {
-    const g = textured ? new THREE.SphereGeometry(radius, 256, 128, Math.PI) : new THREE.SphereGeometry(radius, 256, 128);
-    if (textured) {
-      const uv = g.attributes.uv;
-      for (let i = 0; i < uv.count; i++) uv.setY(i, 1 - uv.getY(i));
+    const start = textured ? Math.PI : 0;
+    const g = new THREE.SphereGeometry(radius, 256, 128, start);
+    const uv = g.attributes.uv, tangents = new Float32Array(uv.count * 4);
+    for (let i = 0; i < uv.count; i++) {
+      const phi = start + 2 * Math.PI * uv.getX(i);  // three.js's: x = -cos(phi) sin(theta), z = sin(phi) sin(theta)
+      tangents.set([Math.sin(phi), 0, Math.cos(phi), 1], 4 * i);
+      if (textured) uv.setY(i, 1 - uv.getY(i));
     }
+    g.setAttribute("tangent", new THREE.BufferAttribute(tangents, 4));
     spheres.set(key, g);
   }
   return spheres.get(key);
