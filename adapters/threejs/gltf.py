@@ -31,11 +31,13 @@ def _as_list(v: Value) -> list:
 
 
 def _extensions(p: dict[str, Value], spec: ModelSpec) -> dict[str, dict[str, Any]]:
-    """The KHR_materials extensions these parameters need (none at their defaults)."""
+    """The KHR_materials extensions these parameters need: none at their defaults, and none that does
+    nothing with the others (a full metal's IOR and specular: a file read back, or through a table of
+    glTF's defaults, then means what it shows)."""
     ext: dict[str, dict[str, Any]] = {}
-    if _differs(p, spec, "ior"):
+    if _differs(p, spec, "ior") and not spec.is_inert("ior", p):
         ext["KHR_materials_ior"] = {"ior": float(p["ior"])}  # type: ignore[arg-type]
-    if _differs(p, spec, "specular", "specular_color"):
+    if _differs(p, spec, "specular", "specular_color") and not spec.is_inert("specular", p):
         ext["KHR_materials_specular"] = {"specularFactor": float(p["specular"]),  # type: ignore[arg-type]
                                          "specularColorFactor": _rgb(p["specular_color"])}
     if float(p["clearcoat"]) > 0.0:  # type: ignore[arg-type]
@@ -149,11 +151,11 @@ MAPPED = {"baseColorTexture": (("base_color", "baseColorFactor", None),),
 multiplies it by, and its channel (None: the image's colour)."""
 
 
-def mapped_textures(m: dict[str, Any]) -> tuple[dict[str, tuple[int, int | None]], list[str]]:
-    """The parameters driven by a core texture whose factor is 1 (the texture is then the value):
-    parameter -> (texture index, channel); and notes on those read as their factor instead."""
+def mapped_textures(m: dict[str, Any]) -> tuple[list[tuple[str, int, int | None, list[float]]], list[str]]:
+    """The parameters driven by a core texture: (parameter, texture index, channel, its factor: three
+    numbers for the colour, one otherwise); and notes on what of them is not carried."""
     pbr = m.get("pbrMetallicRoughness", {}) or {}
-    out: dict[str, tuple[int, int | None]] = {}
+    out: list[tuple[str, int, int | None, list[float]]] = []
     notes: list[str] = []
     for key, inputs in MAPPED.items():
         ref = pbr.get(key)
@@ -162,12 +164,7 @@ def mapped_textures(m: dict[str, Any]) -> tuple[dict[str, tuple[int, int | None]
         if ref.get("texCoord", 0) != 0 or "KHR_texture_transform" in (ref.get("extensions") or {}):
             notes.append(f"its {key} is read as stored: its texture coordinates' set or transform is not carried")
         for name, factor, channel in inputs:
-            given = [float(x) for x in _as_list(pbr.get(factor, 1.0))][:3]
-            if any(x != 1.0 for x in given):
-                notes.append(f"its {key} is scaled by {factor} {_listed(given)}: {name} is read as the factor, "
-                             "not texel by texel")
-                continue
-            out[name] = (ref["index"], channel)
+            out.append((name, ref["index"], channel, [float(x) for x in _as_list(pbr.get(factor, 1.0))][:3]))
     return out, notes
 
 

@@ -1,5 +1,5 @@
-"""A glTF's images as files a texture can name: an image file beside the `.gltf` (a relative URI) as
-it is; an image embedded in the file (a data URI, or a buffer view of a data-URI buffer, a buffer
+"""A glTF's images as files a texture can name: an image file beside the `.gltf` or below it (a
+relative URI) as it is; an image embedded in the file (a data URI, or a buffer view of a data-URI buffer, a buffer
 file beside it, or a `.glb`'s binary chunk) written once, by its content, to
 `$XDG_CACHE_HOME/brdfremap/gltf-images/` (so a run that is interrupted and started again names the
 same file, and its jobs resume). Only regular files are read, only the bytes a buffer view names,
@@ -41,7 +41,7 @@ def image_file(doc: dict[str, Any], blob: bytes | None, folder: Path, index: int
         raise ConfigError(f"{field}.uri is not a string")
     if isinstance(uri, str) and _scheme(uri, field) != "data":
         path = _local(folder, uri, f"{field}.uri")
-        _kind(_read(path, 0, len(max(MAGIC, key=len)), f"{field}.uri"), field)
+        _kind(_read(path, 0, len(max(MAGIC, key=len)), f"{field}.uri"), f"{field} ({path})")
         return path
     data = _data_uri(uri, f"{field}.uri") if isinstance(uri, str) else _buffer_view(doc, blob, folder, image, index)
     suffix = _kind(data, field)
@@ -76,8 +76,13 @@ def _scheme(uri: str, field: str) -> str:
 
 
 def _local(folder: Path, uri: str, field: str) -> Path:
-    """A relative URI's file: a regular file (not a device, a pipe or a folder)."""
-    path = (folder / urllib.parse.unquote(uri)).resolve()
+    """A relative URI's file: in the glTF's folder or below it, and a regular file (not a device, a
+    pipe or a folder)."""
+    home = folder.resolve()
+    path = (home / urllib.parse.unquote(uri)).resolve()
+    if not path.is_relative_to(home):
+        raise ConfigError(f"{field}: {path} is outside the glTF's folder {home}: only files beside it (or below) "
+                          "are read; copy the file there")
     if not path.is_file():
         raise ConfigError(f"{field}: {path} is not a file")
     return path

@@ -18,7 +18,7 @@ from brdfremap.core.data.errors import ConfigError
 from brdfremap.core.data.schemas import Material, ModelSpec, Value
 from brdfremap.core.library.entries import Converted, Entry
 
-from brdfremap.core.data.textures import ColourSpace, Filter, Texture, TextureMap, texture
+from brdfremap.core.data.textures import ColourSpace, Filter, Texture, TextureMap, read_values, texture
 
 from . import gltf, images, textures
 from .models import MODELS
@@ -160,8 +160,8 @@ def read_document(path: Path) -> tuple[dict[str, Any], bytes | None]:
     try:
         g = GLTF2.load(str(path))
     except Exception as exc:  # pygltflib raises what its parser meets: JSON, struct and key errors alike
-        raise ConfigError(f"cannot read it as glTF: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}",
-                          file=str(path)) from None
+        raise ConfigError(f"cannot read it as glTF (is the file whole?): "
+                          f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}", file=str(path)) from None
     if g is None:
         raise ConfigError("cannot read it as glTF (not a .gltf or .glb file)", file=str(path))
     return json.loads(g.to_json()), g.binary_blob()
@@ -169,8 +169,9 @@ def read_document(path: Path) -> tuple[dict[str, Any], bytes | None]:
 
 class GltfReader:
     """glTF materials as `threejs:gltf_pbr` sources. A base colour, metallic or roughness driven by its
-    core texture (of factor 1) is read as that texture, which a table of `gltf_pbr` remaps texel by
-    texel; every other texture-driven input is listed and read as its factor."""
+    core texture is read as its factor times the image's mean, and (of factor 1) as that texture,
+    which a table of `gltf_pbr` remaps texel by texel; every other texture-driven input is listed and
+    read as its factor."""
 
     name = "glTF 2.0 (.gltf, .glb)"
     suffixes = (".gltf", ".glb")
@@ -201,27 +202,41 @@ class GltfReader:
     @staticmethod
     def _read_entry(m: dict[str, Any], name: str, path: Path, doc: dict[str, Any], blob: bytes | None) -> Entry:
         params, notes, textured = gltf.read_material(m)
+        maps, constants, said = _maps(m, doc, blob, path, name)
+        params.update(constants)
         spec = MODELS["gltf_pbr"]
         clipped = {k: spec.param(k).clip(tuple(v) if isinstance(v, (list, tuple)) else v) for k, v in params.items()}
         notes += [f"{k} {_shown(params[k])} is outside the model's bounds: read as {_shown(v)}"
                   for k, v in clipped.items() if _shown(v) != _shown(params[k])]
-        maps, said = _maps(m, doc, blob, path, name)
         return Entry(name=name, file=str(path), notes=notes + said, textured=textured,
                      material=Material(adapter="threejs", model="gltf_pbr", name=name, params=clipped,
                                        textures=maps))
 
 
 def _maps(m: dict[str, Any], doc: dict[str, Any], blob: bytes | None, path: Path,
-          name: str) -> tuple[dict[str, Texture], list[str]]:
-    """The material's core textures as textures of its parameters, and notes on those that are not."""
+          name: str) -> tuple[dict[str, Texture], dict[str, Value], list[str]]:
+    """The material's core textures: those of factor 1 as textures of their parameters (a table remaps
+    them texel by texel); each one's constant, its factor times its image's mean (what a material
+    without the texture would be on average, as a Mitsuba bitmap's constant is its mean); and notes."""
     wanted, notes = gltf.mapped_textures(m)
+    kinds = textures.kinds(MODELS["gltf_pbr"])
     out: dict[str, Texture] = {}
-    for param, (index, channel) in wanted.items():
+    constants: dict[str, Value] = {}
+    for param, index, channel, factor in wanted:
         try:
-            out[param] = _map(doc, blob, path, index, channel, f"{name}: {param}")
+            tex = _map(doc, blob, path, index, channel, f"{name}: {param}")
+            mean = read_values(tex, kinds[param], where=f"{name}: {param}").reshape(-1, 3 if channel is None else 1)
         except ConfigError as exc:
             notes.append(f"{param}: {exc}: read as its factor")
-    return out, notes
+            continue
+        scaled = [f * float(v) for f, v in zip(factor, mean.mean(axis=0, dtype=np.float64))]
+        constants[param] = tuple(scaled) if channel is None else scaled[0]  # type: ignore[assignment]
+        if all(f == 1.0 for f in factor):
+            out[param] = tex
+        else:
+            notes.append(f"{param}: its texture is scaled by a factor of {_shown(tuple(factor))}: read as the "
+                         f"factor times the image's mean, {_shown(constants[param])}, not texel by texel")
+    return out, constants, notes
 
 
 def _map(doc: dict[str, Any], blob: bytes | None, path: Path, index: int, channel: int | None,

@@ -11,7 +11,8 @@ EXIT_SOME_FAILED = 1
 
 def parser() -> argparse.ArgumentParser:
     p = options.Parser(prog="remap convert", description="Convert every material of scene and library files "
-                       "(Mitsuba XML, Blender .blend, MaterialX .mtlx, brdf-remap YAML, or folders of them) to "
+                       "(Mitsuba XML, Blender .blend, MaterialX .mtlx, glTF .gltf/.glb, brdf-remap YAML, or folders "
+                       "of them) to "
                        "another renderer: one native library per target, and DIR/index.html showing each "
                        "material's remap and how close it is. An interrupted run resumes.")
     p.add_argument("inputs", nargs="+", metavar="INPUT", help="files (or folders of them) to read")

@@ -60,6 +60,8 @@ class Item:
     task: Task | None = None
     done: Done | None = None
     failure: str = ""
+    flattened: bool = False
+    """A textured material no table maps: converted with its textures' constants (said on its line)."""
 
     @property
     def status(self) -> ItemStatus:
@@ -135,6 +137,7 @@ def _through_table(item: Item, dest: Destination, registry: AdapterRegistry, sce
         item.entry = e.model_copy(update={
             "notes": [*e.notes, f"textured inputs ({inputs}) converted with their constant values: {why}"],
             "material": src.model_copy(update={"textures": {}})})
+        item.flattened = True
         return False
     use, answer = min(answers, key=lambda ua: (ua[1].lookup.expected_error is None, ua[1].lookup.expected_error or 0.0))
     t = use.table
@@ -211,7 +214,8 @@ def _prepare(item: Item, dest: Destination, registry: AdapterRegistry, adapters:
     job = Job(source=src, target=Target(adapter=dest.adapter, model=item.model, fix=fix), scene=scene,
               settings=settings, label=f"{e.file}: {e.name}")
     where = Where(source_file=e.file, params_prefix=f"{e.name}: params", target_file=None, target_prefix="--to ")
-    item.task = Task(item.slot, resolve(job, registry, where).job, e.name)
+    title = f"{e.name} (its textures as constants: no table maps it)" if item.flattened else e.name
+    item.task = Task(item.slot, resolve(job, registry, where).job, title)
 
 
 def convert(entries: list[Entry], dest: Destination, out: str | Path, registry: AdapterRegistry, formats: Formats,

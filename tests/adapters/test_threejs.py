@@ -353,6 +353,7 @@ def test_blender_imports_a_textured_gltf_with_its_images(tmp_path, cycles_adapte
 
 
 TABLE = ROOT / "configs" / "tables" / "built" / "mitsuba-roughconductor-to-threejs-gltf.json"
+GLTF_TABLE = ROOT / "configs" / "tables" / "built" / "threejs-gltf-to-cycles-principled.json"
 
 
 def test_a_textured_mitsuba_metal_converts_to_gltf_texel_by_texel(tmp_path, mitsuba_adapter, three):
@@ -376,13 +377,19 @@ def test_a_textured_mitsuba_metal_converts_to_gltf_texel_by_texel(tmp_path, mits
     folder = out / "materials" / row["slot"]
     record = json.loads((folder / "result.json").read_text())["textures"]
     assert record["table"] == "Mitsuba roughconductor (Beckmann) -> three.js glTF PBR"
-    assert {m["param"] for m in record["maps"]} == {"base_color", "metallic", "roughness"}
-    assert "ior" in record["held"]  # glTF takes an IOR only as a number: its mean is written, and said
+    assert {m["param"] for m in record["maps"]} == {"base_color", "roughness"}  # a metal: metallic 1, held
+    assert "KHR_materials_ior" not in json.dumps(doc)  # a full metal's IOR does nothing: not written
     studio = next(c for c in record["checks"] if c["condition"] == "environment")
     scene = ProbeScene(resolution=studio["resolution"], lights=[EnvironmentLight(type="environment", map="studio")])
     rendered = three.render_document(material_document(doc, 0), scene)
     assert np.array_equal(rendered, read_image(folder / "target-textured.exr"))  # the file is what was checked
     assert relative_rmse(read_image(folder / "source-textured.exr"), rendered) == pytest.approx(studio["error"], rel=1e-4)
+    # And back: the written glTF, read as a source, goes into Cycles texel by texel through the other table.
+    back = remap("convert", path, "--to", "cycles:principled", "--table", GLTF_TABLE, "--out", tmp_path / "back", *QUICK,
+                 "--validate", "none")
+    assert back.returncode == 0, back.stdout + back.stderr
+    row = json.loads((tmp_path / "back" / "convert.json").read_text())["materials"][0]
+    assert "texel by texel" in row["model_why"], row
 
 
 def _png(values: np.ndarray) -> bytes:
@@ -423,9 +430,17 @@ def test_a_gltfs_core_textures_are_read_from_files_data_uris_and_a_glb(tmp_path,
     from brdfremap.core.data.textures import read_values
     assert np.allclose(read_values(maps["roughness"], "scalar")[0], np.round(np.linspace(0, 1, 16) * 255) / 255)
     assert np.allclose(read_values(maps["metallic"], "scalar")[0], 1 - np.round(np.linspace(0, 1, 16) * 255) / 255)
-    assert set(scaled.material.textures) == {"roughness"}  # its metallic is 0.5 x the texture: read as the factor
-    assert any("metallicFactor 0.5" in n for n in scaled.notes)
+    assert packed_entry.material.params["roughness"] == pytest.approx(0.5, abs=0.01)  # constants: the images' means
+    assert packed_entry.material.params["metallic"] == pytest.approx(0.5, abs=0.01)
+    assert set(scaled.material.textures) == {"roughness"}  # its metallic is 0.5 x the texture: not texel by texel,
+    assert scaled.material.params["metallic"] == pytest.approx(0.25, abs=0.01)  # but 0.5 x the image's mean
+    assert any("scaled by a factor of 0.5" in n for n in scaled.notes)
     assert remote.material.textures == {} and any("https://x/y.png" in n for n in remote.notes)  # never fetched
+    (tmp_path / "sub").mkdir()  # an image outside the glTF's folder is not read
+    (tmp_path / "sub" / "m.gltf").write_text(json.dumps(doc).replace('"orm.png"', '"../orm.png"'))
+    outside = GltfReader().read(tmp_path / "sub" / "m.gltf")[0]
+    assert set(outside.material.textures) == {"base_color"}
+    assert any("outside the glTF's folder" in n for n in outside.notes)
     _glb(doc, tmp_path / "m.glb", [base64.b64decode(colour.partition(",")[2]), (tmp_path / "orm.png").read_bytes()])
     glb = GltfReader().read(tmp_path / "m.glb")[0].material.textures  # its images in the binary chunk
     assert {k: t.sha256 for k, t in glb.items()} == {k: t.sha256 for k, t in maps.items()}
@@ -447,7 +462,6 @@ def _glb(doc: dict, path, images: list[bytes]) -> None:
     path.write_bytes(struct.pack("<4sII", b"glTF", 2, 12 + len(body)) + body)
 
 
-GLTF_TABLE = ROOT / "configs" / "tables" / "built" / "threejs-gltf-to-cycles-principled.json"
 EXPORT = """
 import bpy, sys
 bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -491,6 +505,14 @@ def test_a_glb_from_blenders_exporter_converts_to_cycles_texel_by_texel(tmp_path
     assert {c["condition"] for c in record["checks"]} == {"scene", "environment"}
     assert all(c["error"] < 0.15 for c in record["checks"]), record["checks"]
     assert (tmp_path / "out" / "library.blend").is_file()
+    # Without a table: converted with its textures' constants (the images' means, a copper colour, not
+    # the factors' white), and its line says so.
+    plain = remap("convert", glb, "--to", "cycles:principled", "--out", tmp_path / "flat", "--resolution", "48",
+                  "--spp", "16", "--validate", "none", env={"XDG_CACHE_HOME": str(tmp_path / "cache")})
+    assert plain.returncode == 0, plain.stdout + plain.stderr
+    assert "worn copper (its textures as constants: no table maps it) -> principled" in plain.stdout + plain.stderr
+    colour = entry.material.params["base_color"]
+    assert colour[0] > colour[1] > colour[2] and colour[0] < 0.95, colour
 
 
 def test_a_malformed_or_hostile_gltf_is_said_per_material_and_never_read_past_its_images(tmp_path, monkeypatch):
@@ -504,23 +526,27 @@ def test_a_malformed_or_hostile_gltf_is_said_per_material_and_never_read_past_it
     png = _png(np.full((2, 2, 3), 0.5, np.float32))
     doc = {"asset": {"version": "2.0"},
            "buffers": [{"byteLength": len(png), "uri": "data:application/octet-stream;base64," +
-                        base64.b64encode(png).decode()}, {"byteLength": 4}, {"uri": "/dev/zero", "byteLength": 8}],
+                        base64.b64encode(png).decode()}, {"byteLength": 4}, {"uri": "/dev/zero", "byteLength": 8},
+                       {"uri": "pipe.bin", "byteLength": 8}],
            "bufferViews": [{"buffer": 1, "byteLength": 4}, {"buffer": 0, "byteOffset": 64, "byteLength": 4096},
-                           {"buffer": 2, "byteLength": 8}, {"buffer": 0, "byteLength": len(png)}],
+                           {"buffer": 2, "byteLength": 8}, {"buffer": 0, "byteLength": len(png)},
+                           {"buffer": 3, "byteLength": 8}],
            "images": [{"uri": "notes.txt"}, {"bufferView": 0}, {"bufferView": 1}, {"bufferView": 2},
-                      {"uri": "file:///etc/passwd"}, {"bufferView": 3}],
-           "textures": [{"source": i} for i in range(6)],
+                      {"uri": "file:///etc/passwd"}, {"bufferView": 3}, {"bufferView": 4}],
+           "textures": [{"source": i} for i in range(7)],
            "materials": [{"name": f"m{i}", "pbrMetallicRoughness": {"baseColorTexture": {"index": i}}}
-                         for i in range(6)] + [{"name": "bad", "pbrMetallicRoughness": {"baseColorFactor": [0.5]}}]}
+                         for i in range(7)] + [{"name": "bad", "pbrMetallicRoughness": {"baseColorFactor": [0.5]}}]}
+    os.mkfifo(tmp_path / "pipe.bin")  # a pipe beside the file: never opened (it would block)
     path = tmp_path / "hostile.gltf"
     path.write_text(json.dumps(doc))
     entries = GltfReader().read(path)
     said = {e.name: " ".join(e.notes) + e.problem for e in entries}
-    assert "images[0] is neither a PNG nor a JPEG" in said["m0"]
+    assert "images[0] (" in said["m0"] and "is neither a PNG nor a JPEG" in said["m0"]
     assert "buffers[1] has no uri" in said["m1"]
     assert "bufferViews[1] runs past the end of buffers[0]" in said["m2"]
-    assert "buffers[2].uri: /dev/zero is not a file" in said["m3"]
+    assert "buffers[2].uri: /dev/zero is outside the glTF's folder" in said["m3"]
     assert "nothing is fetched" in said["m4"]
+    assert "pipe.bin is not a file" in said["m6"]
     assert [e.name for e in entries if e.material and e.material.textures] == ["m5"]  # the one good image
     bad = entries[-1]
-    assert bad.material is None and "materials[6] is malformed glTF" in bad.problem
+    assert bad.material is None and "materials[7] is malformed glTF" in bad.problem
