@@ -104,6 +104,7 @@ def texture_result(resolved, source: Adapter | None, target: Adapter, params: di
     numbers = {**out.constants, **{n: _mean(out.maps[n]) for n in held}}
     native_params = {**params, **{n: spec.param(n).clip(v) for n, v in numbers.items()}}
     maps = {n: m for n, m in out.maps.items() if n not in held}
+    held = {n: why for n, why in held.items() if not spec.is_inert(n, native_params)}  # one that does nothing: unsaid
     filt = next(iter(job.source.textures.values())).filter
     files, native, records, written = {}, {}, [], {}
     for name, values in maps.items():

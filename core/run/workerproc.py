@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import atexit
 import collections
+import concurrent.futures
 import json
 import os
 import queue
@@ -42,6 +43,10 @@ def die_with_parent() -> None:
 
 
 _LIVE: "weakref.WeakSet[JsonLinesWorker]" = weakref.WeakSet()
+_SPAWNER = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="brdfremap-spawn")
+"""The one thread every worker process is started from. Linux's parent-death signal follows the thread
+that forked the child, not its process: a worker (re)started from a thread that then ended (a request's
+thread, a pool's retired thread) was killed with it. This thread lives as long as the process."""
 
 
 @atexit.register
@@ -69,9 +74,10 @@ class JsonLinesWorker:
         self._lines = queue.Queue()
         self._stderr.clear()
         try:
-            self.proc = subprocess.Popen(
-                self.argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                bufsize=1, env=self.env, cwd=self.cwd, start_new_session=True, preexec_fn=die_with_parent)
+            self.proc = _SPAWNER.submit(
+                subprocess.Popen, self.argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                text=True, bufsize=1, env=self.env, cwd=self.cwd, start_new_session=True,
+                preexec_fn=die_with_parent).result()
         except OSError as exc:
             raise RenderError(f"cannot start {self.argv[0]!r}: {exc}", where=self.name) from exc
         threading.Thread(target=self._pump_answers, args=(self.proc.stdout, self._lines), daemon=True).start()

@@ -48,6 +48,20 @@ def test_a_worker_killed_during_its_start_up_is_restarted_once():
         w.close()
 
 
+def test_a_worker_started_from_a_thread_that_ends_lives_on():
+    """Linux's parent-death signal follows the thread that forked: a worker started from a request's
+    thread was killed when that thread ended (found as a flaky case 7 under load)."""
+    w = JsonLinesWorker([sys.executable, "-c", SLOW_START.replace("time.sleep(1.5)", "pass")], name="threaded")
+    try:
+        t = threading.Thread(target=lambda: w.request({"op": "ping"}))
+        t.start()
+        t.join(timeout=60)
+        time.sleep(0.5)
+        assert w.alive()
+    finally:
+        w.close()
+
+
 def test_a_blender_worker_killed_during_its_start_up_is_restarted(cycles_adapter):
     """Case 7 with the real Blender worker."""
     from brdfremap.adapters.cycles.adapter import CyclesAdapter
