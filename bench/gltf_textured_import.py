@@ -1,9 +1,11 @@
 """A textured glTF material into Cycles: this tool's texel-by-texel remap against Blender's glTF importer.
 
-    python bench/gltf_textured_import.py FILE.glb TABLE [--out DIR]
+    python bench/gltf_textured_import.py [FILE.glb] [--table TABLE] [--out DIR]
 
-The first material of FILE (its base colour and metallic-roughness textures) is remapped to Cycles'
-Principled BSDF through TABLE (`remap convert`, stored in DIR: a rerun reuses it). Then, on the probe
+The first material of FILE (its base colour and metallic-roughness textures; without FILE, a
+Principled BSDF of the demo's worn-copper colour and roughness images, metallic 1, exported by
+Blender's own glTF exporter into DIR) is remapped to Cycles' Principled BSDF through TABLE (the
+shipped glTF table unless given; `remap convert`, stored in DIR: a rerun reuses it). Then, on the probe
 sphere under the textured check's two conditions (the scene's light; the studio environment):
 
 - the glTF material, textured, rendered by three.js: the source, as a glTF viewer shows it;
@@ -30,6 +32,24 @@ from brdfremap.core.data.metrics import relative_rmse
 from brdfremap.core.data.scene import EnvironmentLight, ProbeScene
 from brdfremap.core.data.textures import Texture, TextureMap, read_values
 
+EXPORT = """
+import bpy, sys
+bpy.ops.wm.read_factory_settings(use_empty=True)
+m = bpy.data.materials.new("worn copper")
+m.use_nodes = True
+nt = m.node_tree
+p = next(n for n in nt.nodes if n.type == "BSDF_PRINCIPLED")
+for file, socket, space in ((sys.argv[1] + "/worn-copper-colour.png", "Base Color", "sRGB"),
+                            (sys.argv[1] + "/worn-copper-roughness.png", "Roughness", "Non-Color")):
+    n = nt.nodes.new("ShaderNodeTexImage")
+    n.image = bpy.data.images.load(file)
+    n.image.colorspace_settings.name = space
+    nt.links.new(n.outputs["Color"], p.inputs[socket])
+p.inputs["Metallic"].default_value = 1.0
+bpy.ops.mesh.primitive_uv_sphere_add()
+bpy.context.active_object.data.materials.append(m)
+bpy.ops.export_scene.gltf(filepath=sys.argv[2], export_format="GLB")
+"""
 SCENES = {"scene's light": ProbeScene(resolution=128, spp=256),
           "studio": ProbeScene(lights=[EnvironmentLight(type="environment", map="studio")], resolution=64, spp=1024)}
 
@@ -50,15 +70,21 @@ def remapped(glb: Path, table: Path, out: Path) -> tuple[dict, dict[str, Texture
 
 def main() -> int:
     ap = argparse.ArgumentParser()
-    ap.add_argument("glb", type=Path)
-    ap.add_argument("table", type=Path)
+    ap.add_argument("glb", type=Path, nargs="?")
+    ap.add_argument("--table", type=Path, default=ROOT / "configs" / "tables" / "built" /
+                    "threejs-gltf-to-cycles-principled.json")
     ap.add_argument("--out", type=Path, default=ROOT / "out" / "bench-gltf-import")
     args = ap.parse_args()
+    if args.glb is None:
+        args.out.mkdir(parents=True, exist_ok=True)
+        args.glb = args.out / "worn-copper.glb"
+        subprocess.run([sys.executable, "-c", EXPORT, str(ROOT / "examples" / "library" / "textures"), str(args.glb)],
+                       check=True, capture_output=True)
     entry = GltfReader().read(args.glb)[0]
     src = entry.material
     kinds = {"base_color": "rgb", "roughness": "scalar", "metallic": "scalar"}
     given = {k: TextureMap(read_values(t, kinds[k]), t.filter) for k, t in src.textures.items()}
-    ours, our_maps = remapped(args.glb, args.table, args.out)
+    ours, our_maps = remapped(args.glb, args.table, args.out / "remap")
     imported = {"base_color": src.params.get("base_color", (1.0, 1.0, 1.0)), "metallic": src.params.get("metallic", 1.0),
                 "roughness": src.params.get("roughness", 1.0), "ior": 1.5, "specular_ior_level": 0.5}
     print(f"{entry.name}: textures {', '.join(sorted(given))}, {next(iter(given.values())).values.shape[1]} x "
