@@ -8,7 +8,10 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
+
 from brdfremap.core.data.errors import ConfigError
+from brdfremap.core.data.kinds import ParamKind
 from brdfremap.core.library.formats import Entry, clip_into
 from brdfremap.core.data.schemas import Material
 from brdfremap.core.data.textures import colour_to_linear
@@ -73,6 +76,7 @@ class MaterialXReader:
             return Entry(name=name, file=file, problem=str(exc))
         notes[:0] = [NOTE.format(shader=category), *upgraded.get(shader.getName(), [])]
         textures = _textures(shader, category, name, notes)
+        params.update(_means(textures, name, notes))
         return Entry(name=name, file=file, notes=notes, textured=textured,
                      material=Material(adapter="cycles", model="principled", params=params, name=name,
                                        textures=textures))
@@ -131,18 +135,43 @@ SRGB_SPACES = {"srgb_texture", "srgb_tx", "sRGB"}
 LINEAR_SPACES = {"", "lin_rec709", "raw", "Raw", "linear", "lin_srgb", "scene-linear Rec.709-sRGB"}
 
 
+IMAGES = {"image", "tiledimage", "gltf_image", "gltf_colorimage"}
+CHANNELS = {"outx": 0, "outy": 1, "outz": 2}
+"""A `separate3` of an image: which of its channels each output is (a glTF occlusion-roughness-metallic
+image's roughness is its `outy`, its metallic its `outz`)."""
+
+
+def _image_node(inp) -> tuple[object | None, int | None, str]:
+    """The image node an input reads (directly, or one channel of it through a `separate3`), the
+    channel it reads (None: its colour), and why it cannot be read as it is ('' if it can)."""
+    node = inp.getConnectedNode() if inp is not None else None
+    channel = None
+    if node is not None and node.getCategory() == "separate3":
+        channel = CHANNELS.get(inp.getOutputString())
+        up = node.getInput("in")
+        node = up.getConnectedNode() if up is not None else None
+    if node is None or node.getCategory() not in IMAGES:
+        return None, None, ""
+    if node.getCategory() == "gltf_colorimage" and inp.getOutputString() not in ("", "outcolor"):
+        return node, None, "it reads the image's alpha"
+    if channel is None and node.getType() == "float":
+        channel = 0  # MaterialX reads a float image's first channel
+    return node, channel, ""
+
+
 def _textures(shader, category: str, name: str, notes: list[str]) -> dict:
-    """The inputs an `image` or `tiledimage` node drives directly (default texture coordinates, no
-    tiling), each of a Principled parameter that is that one input as it is, as textures."""
+    """The inputs an image node drives directly (`image`, `tiledimage`, glTF's `gltf_image` and
+    `gltf_colorimage`, or one channel of one through a `separate3`; default texture coordinates, no
+    tiling, transform or factor), each of a Principled parameter that is that one input as it is, as
+    textures."""
     from brdfremap.core.data.textures import texture
 
     out = {}
     for pname, inputs in TO_PRINCIPLED[category].items():
-        inp = shader.getInput(inputs[0])
-        node = inp.getConnectedNode() if inp is not None else None
-        if node is None or node.getCategory() not in ("image", "tiledimage"):
+        node, channel, why = _image_node(shader.getInput(inputs[0]))
+        if node is None:
             continue
-        why = _unusable(shader, node, pname, inputs)
+        why = why or _unusable(shader, node, pname, inputs)
         f = node.getInput("file")
         path = Path(f.getResolvedValueString()) if f is not None and not why else None
         if path is not None and not path.is_absolute():
@@ -158,8 +187,28 @@ def _textures(shader, category: str, name: str, notes: list[str]) -> dict:
         filt = node.getInput("filtertype")
         out[pname] = texture(path, "srgb" if space in SRGB_SPACES else "linear",
                              "nearest" if filt is not None and filt.getValueString() == "closest" else "linear",
-                             channel=0 if node.getType() == "float" else None,  # MaterialX reads a float's first
-                             where=f"{name}: {pname}")
+                             channel=channel, where=f"{name}: {pname}")
+    return out
+
+
+def _means(textures: dict, name: str, notes: list[str]) -> dict:
+    """Each texture's mean, the constant its input converts with where no table maps it (as a Mitsuba
+    bitmap's is); one that cannot be read is dropped from ``textures``, and said."""
+    from brdfremap.adapters.cycles.models import PRINCIPLED
+    from brdfremap.core.data.textures import read_values
+
+    out = {}
+    for pname, tex in list(textures.items()):
+        kind = PRINCIPLED.param(pname).kind
+        rgb = kind == ParamKind.RGB
+        try:
+            values = read_values(tex, kind, where=f"{name}: {pname}")
+        except ConfigError as exc:
+            notes.append(f"{pname}: {exc}: read as its constant")
+            del textures[pname]
+            continue
+        mean = values.reshape(-1, 3 if rgb else 1).mean(axis=0, dtype=np.float64)
+        out[pname] = PRINCIPLED.param(pname).clip(tuple(float(x) for x in mean) if rgb else float(mean[0]))
     return out
 
 
@@ -178,6 +227,20 @@ def _unusable(shader, node, pname: str, inputs: tuple[str, ...]) -> str:
         tiles = node.getInput("uvtiling")
         if tiles is not None and tiles.hasValueString() and tiles.getValueString().replace(" ", "") not in ("1,1",):
             return "its image is tiled"
+    return _gltf_unusable(node)
+
+
+def _gltf_unusable(node) -> str:
+    """A glTF image node read as it is: its factor 1, its texture transform the identity (glTF's
+    KHR_texture_transform as MaterialX writes it)."""
+    nodedef = node.getNodeDef()
+    for name in ("factor", "color", "scale", "rotate", "offset", "pivot"):
+        inp = node.getInput(name)
+        default = nodedef.getActiveInput(name) if nodedef is not None else None
+        if inp is None or default is None:
+            continue
+        if inp.getConnectedNode() is not None or (inp.hasValueString() and inp.getValue() != default.getValue()):
+            return f"its image's {name} is not the identity (only an image read as it is is remapped texel by texel)"
     return ""
 
 

@@ -62,7 +62,8 @@ class Answer:
 def axis_values(table: Table, material: Material, source_spec: ModelSpec, file: str | None,
                 prefix: str = "params") -> dict[str, Any]:
     """The material's values on the table's axes, once it is shown to be what the table was built
-    for: the same model, and the same values of every parameter that is not an axis."""
+    for: the same model, and the same values of every parameter that is not an axis (but one that
+    does nothing in either)."""
     src = table.spec.source
     if (material.adapter, material.model) != (src.adapter, src.model):
         raise ConfigError(f"is {material.adapter}:{material.model}, and the table {table.name!r} maps "
@@ -71,6 +72,8 @@ def axis_values(table: Table, material: Material, source_spec: ModelSpec, file: 
     for name, value in source_spec.active(params).items():
         if name in table.spec.axes or name not in table.source_params:
             continue
+        if source_spec.is_inert(name, params) and source_spec.is_inert(name, table.source_params):
+            continue  # it does nothing in either (a coat's roughness without a coat): not a difference
         if not _same(value, table.source_params[name]):
             raise ConfigError(f"is {_text(value)}, and the table {table.name!r} was built for {_text(table.source_params[name])} "
                               f"(its axes: {', '.join(table.spec.axes)}): build a table for this value (its spec's "

@@ -245,3 +245,29 @@ def test_convert_takes_the_table_whose_direct_fits_come_closest(tmp_path):
         assert item.task.job.lookup.table == "closer" and item.model == "principled"
         assert "'closer'" in item.why and "its fits reach 2.0%" in item.why
         assert "'synthetic principled' (principled) 10.0%" in item.why
+
+
+def test_materialx_own_gltf_boombox_reads_its_packed_textures_and_goes_through_a_table(corpus, tmp_path,
+                                                                                        mitsuba_adapter,
+                                                                                        cycles_adapter):
+    """MaterialX's own glTF example (the corpus's boombox): its base colour a `gltf_colorimage`, its
+    roughness and metallic the green and blue of one `gltf_image` through a `separate3`. Read as
+    textures (their constants the images' means), and remapped to Mitsuba texel by texel through the
+    shipped Principled table (its clearcoat roughness of 0, which does nothing without a coat, is not
+    a difference from the table's 0.03)."""
+    from brdfremap.adapters.materialx.reader import MaterialXReader
+
+    doc = corpus / "materialx" / "GltfPbr" / "gltf_pbr_boombox.mtlx"
+    (box,) = MaterialXReader().read(doc)
+    tex = box.material.textures
+    assert {k: (t.channel, t.colorspace) for k, t in tex.items()} == {
+        "base_color": (None, "srgb"), "roughness": (1, "linear"), "metallic": (2, "linear")}
+    assert box.material.params["metallic"] < 0.2 and max(box.material.params["base_color"]) < 0.3  # black plastic
+    table = ROOT / "configs" / "tables" / "built" / "cycles-principled-to-mitsuba-principled.json"
+    assert main(["convert", str(doc), "--to", "mitsuba", "--table", str(table), "--out", str(tmp_path / "o"),
+                 *FAST]) == 0
+    row = json.loads((tmp_path / "o" / "convert.json").read_text())["materials"][0]
+    assert "texel by texel" in row["model_why"], row
+    result = read_result(tmp_path / "o" / "materials" / row["slot"] / "result.json")
+    assert (result["textures"]["width"], result["textures"]["height"]) == (2048, 2048)
+    assert any("roughness 0 below the table's range" in o for o in result["textures"]["outside"])  # said
