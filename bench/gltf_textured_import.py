@@ -32,24 +32,8 @@ from brdfremap.core.data.metrics import relative_rmse
 from brdfremap.core.data.scene import EnvironmentLight, ProbeScene
 from brdfremap.core.data.textures import Texture, TextureMap, read_values
 
-EXPORT = """
-import bpy, sys
-bpy.ops.wm.read_factory_settings(use_empty=True)
-m = bpy.data.materials.new("worn copper")
-m.use_nodes = True
-nt = m.node_tree
-p = next(n for n in nt.nodes if n.type == "BSDF_PRINCIPLED")
-for file, socket, space in ((sys.argv[1] + "/worn-copper-colour.png", "Base Color", "sRGB"),
-                            (sys.argv[1] + "/worn-copper-roughness.png", "Roughness", "Non-Color")):
-    n = nt.nodes.new("ShaderNodeTexImage")
-    n.image = bpy.data.images.load(file)
-    n.image.colorspace_settings.name = space
-    nt.links.new(n.outputs["Color"], p.inputs[socket])
-p.inputs["Metallic"].default_value = 1.0
-bpy.ops.mesh.primitive_uv_sphere_add()
-bpy.context.active_object.data.materials.append(m)
-bpy.ops.export_scene.gltf(filepath=sys.argv[2], export_format="GLB")
-"""
+EXPORT = ROOT / "tests" / "data" / "gltf" / "export_worn_copper.py"
+"""Blender's own glTF export of a textured Principled BSDF (a script run with bpy)."""
 SCENES = {"scene's light": ProbeScene(resolution=128, spp=256),
           "studio": ProbeScene(lights=[EnvironmentLight(type="environment", map="studio")], resolution=64, spp=1024)}
 
@@ -78,7 +62,7 @@ def main() -> int:
     if args.glb is None:
         args.out.mkdir(parents=True, exist_ok=True)
         args.glb = args.out / "worn-copper.glb"
-        subprocess.run([sys.executable, "-c", EXPORT, str(ROOT / "examples" / "library" / "textures"), str(args.glb)],
+        subprocess.run([sys.executable, str(EXPORT), str(ROOT / "examples" / "library" / "textures"), str(args.glb)],
                        check=True, capture_output=True)
     entry = GltfReader().read(args.glb)[0]
     src = entry.material

@@ -120,3 +120,12 @@ def open_in_chromium(page_path, screenshot=None, click=None) -> dict:
         finally:
             browser.close()
     return {"errors": errors, "images": images, "broken": broken, "rows": rows}
+
+
+def checker(seed=1, rows=6, cols=12, texel=8):
+    """A texture of rows x cols cells of random colours, each texel x texel texels (float32, H x W x 3):
+    a mistaken texture layout (flipped, mirrored, turned) is far off."""
+    import numpy as np
+
+    cells = np.random.default_rng(seed).uniform(0.05, 0.9, (rows, cols, 3)).astype(np.float32)
+    return np.repeat(np.repeat(cells, texel, axis=0), texel, axis=1)

@@ -8,10 +8,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-import numpy as np
-
 from brdfremap.core.data.errors import ConfigError
-from brdfremap.core.data.kinds import ParamKind
 from brdfremap.core.library.formats import Entry, clip_into
 from brdfremap.core.data.schemas import Material
 from brdfremap.core.data.textures import colour_to_linear
@@ -195,20 +192,17 @@ def _means(textures: dict, name: str, notes: list[str]) -> dict:
     """Each texture's mean, the constant its input converts with where no table maps it (as a Mitsuba
     bitmap's is); one that cannot be read is dropped from ``textures``, and said."""
     from brdfremap.adapters.cycles.models import PRINCIPLED
-    from brdfremap.core.data.textures import read_values
+    from brdfremap.core.data.textures import mean_value, read_values
 
     out = {}
     for pname, tex in list(textures.items()):
-        kind = PRINCIPLED.param(pname).kind
-        rgb = kind == ParamKind.RGB
         try:
-            values = read_values(tex, kind, where=f"{name}: {pname}")
+            values = read_values(tex, PRINCIPLED.param(pname).kind, where=f"{name}: {pname}")
         except ConfigError as exc:
             notes.append(f"{pname}: {exc}: read as its constant")
             del textures[pname]
             continue
-        mean = values.reshape(-1, 3 if rgb else 1).mean(axis=0, dtype=np.float64)
-        out[pname] = PRINCIPLED.param(pname).clip(tuple(float(x) for x in mean) if rgb else float(mean[0]))
+        out[pname] = PRINCIPLED.param(pname).clip(mean_value(values))
     return out
 
 

@@ -18,7 +18,7 @@ from brdfremap.core.data.errors import ConfigError
 from brdfremap.core.data.schemas import Material, ModelSpec, Value
 from brdfremap.core.library.entries import Converted, Entry
 
-from brdfremap.core.data.textures import ColourSpace, Filter, Texture, TextureMap, read_values, texture
+from brdfremap.core.data.textures import ColourSpace, Filter, Texture, TextureMap, mean_value, read_values, texture
 
 from . import gltf, images, textures
 from .models import MODELS
@@ -225,12 +225,11 @@ def _maps(m: dict[str, Any], doc: dict[str, Any], blob: bytes | None, path: Path
     for param, index, channel, factor in wanted:
         try:
             tex = _map(doc, blob, path, index, channel, f"{name}: {param}")
-            mean = read_values(tex, kinds[param], where=f"{name}: {param}").reshape(-1, 3 if channel is None else 1)
+            mean = mean_value(read_values(tex, kinds[param], where=f"{name}: {param}"))
         except ConfigError as exc:
             notes.append(f"{param}: {exc}: read as its factor")
             continue
-        scaled = [f * float(v) for f, v in zip(factor, mean.mean(axis=0, dtype=np.float64))]
-        constants[param] = tuple(scaled) if channel is None else scaled[0]  # type: ignore[assignment]
+        constants[param] = tuple(f * v for f, v in zip(factor, mean)) if isinstance(mean, tuple) else factor[0] * mean
         if all(f == 1.0 for f in factor):
             out[param] = tex
         else:
@@ -241,29 +240,15 @@ def _maps(m: dict[str, Any], doc: dict[str, Any], blob: bytes | None, path: Path
 
 def _map(doc: dict[str, Any], blob: bytes | None, path: Path, index: int, channel: int | None,
          where: str) -> Texture:
-    """Texture ``index`` as a texture of one parameter: its image's file, its sampler's filter; a
-    grey image's one channel wherever glTF reads a channel of it (a viewer expands grey to RGB)."""
+    """Texture ``index`` as a texture of one parameter: its image's file, its sampler's filter (a grey
+    image's channel is its grey: `read_values`)."""
     tex = images.item(doc, "textures", index)
     file = images.image_file(doc, blob, path.parent, tex.get("source"))
     which = tex.get("sampler")
     sampler = images.item(doc, "samplers", which) if which is not None else {}
     filt = Filter.NEAREST if sampler.get("magFilter") == textures.NEAREST else Filter.LINEAR
-    if channel is not None and _channels(file) < 3:
-        channel = 0
     space = ColourSpace.SRGB if channel is None else ColourSpace.LINEAR
     return texture(file, space, filt, channel=channel, where=where)
-
-
-def _channels(file: Path) -> int:
-    import OpenImageIO as oiio
-
-    inp = oiio.ImageInput.open(str(file))
-    if inp is None:
-        raise ConfigError(f"cannot read the image: {oiio.geterror() or 'not an image'}", file=str(file))
-    try:
-        return int(inp.spec().nchannels)
-    finally:
-        inp.close()
 
 
 def _first_line(exc: BaseException) -> str:

@@ -93,8 +93,8 @@ def texture(path: str | Path, colorspace: str, filter: str = "linear", *, channe
 
 
 def read_values(tex: Texture, kind: str, where: str = "") -> np.ndarray:
-    """The texture's linear values: H x W (scalar; an RGB image's luminance) or H x W x 3 (RGB; a grey
-    image repeated), float32, row 0 the image's top."""
+    """The texture's linear values: H x W (scalar; an RGB image's luminance, or its ``channel``) or
+    H x W x 3 (RGB; a grey image repeated), float32, row 0 the image's top."""
     import OpenImageIO as oiio
 
     from .imageio import captured_stderr
@@ -114,9 +114,11 @@ def read_values(tex: Texture, kind: str, where: str = "") -> np.ndarray:
         why = (buf.geterror() or said["text"] or "no pixels").strip().splitlines()[0]
         raise ConfigError(f"cannot read the texture: {why}{at}", file=tex.file)
     if tex.channel is not None:
-        if tex.channel >= px.shape[-1]:
+        # A grey image (with or without alpha) has its grey in every colour channel, as viewers expand it.
+        channel = 0 if px.shape[-1] < 3 and tex.channel < 3 else tex.channel
+        if channel >= px.shape[-1]:
             raise ConfigError(f"has {px.shape[-1]} channels, and channel {tex.channel} is read{at}", file=tex.file)
-        px = np.repeat(px[..., tex.channel:tex.channel + 1], 3, axis=-1)
+        px = np.repeat(px[..., channel:channel + 1], 3, axis=-1)
     else:
         px = px[..., :3] if px.shape[-1] >= 3 else np.repeat(px[..., :1], 3, axis=-1)
     if tex.colorspace == ColourSpace.SRGB:
@@ -126,6 +128,13 @@ def read_values(tex: Texture, kind: str, where: str = "") -> np.ndarray:
         raise ConfigError(f"has {bad} texels that are not finite numbers (NaN or infinity){at}: fix the image",
                           file=tex.file)
     return np.ascontiguousarray(px @ LUMA.astype(np.float32) if kind == ParamKind.SCALAR else px)
+
+
+def mean_value(values: np.ndarray) -> float | tuple[float, ...]:
+    """A map's mean (float64): a number for H x W values, a colour for H x W x 3."""
+    m = values.reshape(-1, values.shape[-1]).mean(axis=0, dtype=np.float64) if values.ndim == 3 else \
+        values.mean(dtype=np.float64)
+    return tuple(float(x) for x in m) if np.ndim(m) else float(m)
 
 
 def colour_to_linear(rgb: tuple[float, float, float], space: str, where: str = "") -> tuple[float, float, float]:

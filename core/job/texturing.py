@@ -18,7 +18,7 @@ from ..data.errors import RenderError
 from ..data.metrics import beyond_noise, delta_e_itp, relative_rmse
 from ..data.model import Strict
 from ..data.scene import Lighting, ProbeScene
-from ..data.textures import Texture, TextureMap, decode, encode, kind_of_file
+from ..data.textures import Texture, TextureMap, decode, encode, kind_of_file, mean_value
 from ..host.protocol import Adapter, check_image
 from ..data.schemas import ParamKind
 
@@ -101,7 +101,7 @@ def texture_result(resolved, source: Adapter | None, target: Adapter, params: di
     spec = resolved.target_spec
     held = {n: f"{spec.name} takes {n} only as a number: its mean over the texture is written"
             for n in out.maps if n not in spec.texturable or not target.textures}
-    numbers = {**out.constants, **{n: _mean(out.maps[n]) for n in held}}
+    numbers = {**out.constants, **{n: mean_value(out.maps[n]) for n in held}}
     native_params = {**params, **{n: spec.param(n).clip(v) for n, v in numbers.items()}}
     maps = {n: m for n, m in out.maps.items() if n not in held}
     held = {n: why for n, why in held.items() if not spec.is_inert(n, native_params)}  # one that does nothing: unsaid
@@ -143,12 +143,6 @@ def textured_findings(record: Textured, threshold: float, resolve_limit: float) 
 
 def _plain(params: dict[str, Any]) -> dict[str, Any]:
     return {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()}
-
-
-def _mean(values: np.ndarray) -> Any:
-    m = values.reshape(-1, values.shape[-1]).mean(axis=0, dtype=np.float64) if values.ndim == 3 else \
-        values.mean(dtype=np.float64)
-    return tuple(float(x) for x in m) if np.ndim(m) else float(m)
 
 
 def _check(resolved, source: Adapter, target: Adapter, inputs, maps: dict[str, np.ndarray],

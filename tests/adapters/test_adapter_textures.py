@@ -8,17 +8,13 @@ import pytest
 from brdfremap.core.data.metrics import relative_rmse
 from brdfremap.core.data.scene import ProbeScene
 from brdfremap.core.data.textures import TextureMap
+from helpers import checker
 
 SCENE = ProbeScene().overridden(resolution=64, spp=64)
 
 
-def _checker(seed=1, rows=6, cols=12, texel=8):
-    cells = np.random.default_rng(seed).uniform(0.05, 0.9, (rows, cols, 3)).astype(np.float32)
-    return np.repeat(np.repeat(cells, texel, axis=0), texel, axis=1)
-
-
 def test_mitsuba_and_cycles_lay_a_texture_the_same_way(mitsuba_adapter, cycles_adapter):
-    tex = _checker()
+    tex = checker()
     mi = mitsuba_adapter.render_textured("diffuse", {"reflectance": (0.5,) * 3},
                                          {"reflectance": TextureMap(tex, "nearest")}, SCENE)
     cy = cycles_adapter.render_textured("diffuse", {"color": (0.5,) * 3, "roughness": 0.0},

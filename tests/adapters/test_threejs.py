@@ -21,7 +21,7 @@ from brdfremap.core.data.textures import TextureMap
 from brdfremap.core.host import check
 from brdfremap.core.testing import analytic_lambert, sphere_hits
 from conftest import ROOT, need_adapter
-from helpers import remap
+from helpers import checker, remap
 
 VALIDATOR = os.path.join(os.path.dirname(sys.modules["brdfremap.adapters.threejs.adapter"].__file__), "web",
                          "validate.mjs")
@@ -213,13 +213,8 @@ def test_remap_check_threejs_exits_0_and_calls_the_glass_a_limit():
 TEX_SCENE = ProbeScene().overridden(resolution=64, spp=64)
 
 
-def _checker(seed=1, rows=6, cols=12, texel=8):
-    cells = np.random.default_rng(seed).uniform(0.05, 0.9, (rows, cols, 3)).astype(np.float32)
-    return np.repeat(np.repeat(cells, texel, axis=0), texel, axis=1)
-
-
 def test_three_js_lays_a_texture_on_the_sphere_as_mitsuba_does(three, mitsuba_adapter):
-    tex = _checker()
+    tex = checker()
     white = {"base_color": 0.5, "metallic": 0.0, "roughness": 1.0, "specular": 0.0}
     mi = mitsuba_adapter.render_textured("diffuse", {"reflectance": (0.5,) * 3},
                                          {"reflectance": TextureMap(tex, "nearest")}, TEX_SCENE)
@@ -303,10 +298,10 @@ def _textured_materials():
     ramp = np.broadcast_to(np.linspace(0.1, 0.9, w, dtype=np.float32), (h, w)).copy()
     return [("plain gold", {"base_color": (1.0, 0.77, 0.34), "metallic": 1.0, "roughness": 0.3}, {}),
             ("worn", {"base_color": 0.5, "metallic": 1.0, "roughness": 0.5, "ior": 1.6},
-             {"base_color": TextureMap(_checker(seed=2, rows=4, cols=8, texel=8)), "roughness": TextureMap(ramp),
+             {"base_color": TextureMap(checker(seed=2, rows=4, cols=8, texel=8)), "roughness": TextureMap(ramp),
               "metallic": TextureMap(np.where(ramp > 0.5, 1.0, 0.0).astype(np.float32), "nearest")}),
             ("rough print", {"base_color": 0.5, "metallic": 0.0, "roughness": 0.6},
-             {"base_color": TextureMap(_checker(seed=3, rows=4, cols=8, texel=8), "nearest")})]
+             {"base_color": TextureMap(checker(seed=3, rows=4, cols=8, texel=8), "nearest")})]
 
 
 def test_a_textured_gltf_validates_and_renders_as_its_textured_check(three, tmp_path):
@@ -462,24 +457,8 @@ def _glb(doc: dict, path, images: list[bytes]) -> None:
     path.write_bytes(struct.pack("<4sII", b"glTF", 2, 12 + len(body)) + body)
 
 
-EXPORT = """
-import bpy, sys
-bpy.ops.wm.read_factory_settings(use_empty=True)
-m = bpy.data.materials.new("worn copper")
-m.use_nodes = True
-nt = m.node_tree
-p = next(n for n in nt.nodes if n.type == "BSDF_PRINCIPLED")
-for file, socket, space in ((sys.argv[1] + "/worn-copper-colour.png", "Base Color", "sRGB"),
-                            (sys.argv[1] + "/worn-copper-roughness.png", "Roughness", "Non-Color")):
-    n = nt.nodes.new("ShaderNodeTexImage")
-    n.image = bpy.data.images.load(file)
-    n.image.colorspace_settings.name = space
-    nt.links.new(n.outputs["Color"], p.inputs[socket])
-p.inputs["Metallic"].default_value = 1.0
-bpy.ops.mesh.primitive_uv_sphere_add()
-bpy.context.active_object.data.materials.append(m)
-bpy.ops.export_scene.gltf(filepath=sys.argv[2], export_format="GLB")
-"""
+EXPORT = ROOT / "tests" / "data" / "gltf" / "export_worn_copper.py"
+"""Blender's own glTF export of a textured Principled BSDF (a script run with bpy)."""
 
 
 def test_a_glb_from_blenders_exporter_converts_to_cycles_texel_by_texel(tmp_path, cycles_adapter, three,
@@ -489,7 +468,7 @@ def test_a_glb_from_blenders_exporter_converts_to_cycles_texel_by_texel(tmp_path
     through the shipped table: its maps are the table's, and its textured check is rendered."""
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
     glb = tmp_path / "worn-copper.glb"
-    out = subprocess.run([sys.executable, "-c", EXPORT, str(ROOT / "examples" / "library" / "textures"), str(glb)],
+    out = subprocess.run([sys.executable, str(EXPORT), str(ROOT / "examples" / "library" / "textures"), str(glb)],
                          capture_output=True, text=True, timeout=300)
     assert out.returncode == 0 and glb.is_file(), out.stderr[-2000:]
     (entry,) = GltfReader().read(glb)

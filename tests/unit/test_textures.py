@@ -28,6 +28,10 @@ def test_colour_maps_are_decoded_and_alpha_left_out(tmp_path):
     grey = read_values(texture(f, "linear"), "scalar")[0, 0]
     assert grey == pytest.approx(0.2126 + 0.7152 * 0.8 + 0.0722 * 0.4, abs=3e-3)  # luminance
     assert read_values(texture(f, "linear", channel=2), "scalar")[0, 0] == pytest.approx(0.4, abs=3e-3)
+    grey = _write(tmp_path / "g.png", np.full((4, 4, 1), 0.6))  # a grey image: its grey in every colour channel
+    assert read_values(texture(grey, "linear", channel=2), "scalar")[0, 0] == pytest.approx(0.6, abs=3e-3)
+    with pytest.raises(ConfigError, match="has 1 channels, and channel 3"):
+        read_values(texture(grey, "linear", channel=3), "scalar")  # its alpha, which it has not: said
 
 
 def test_a_written_map_reads_back_as_it_was(tmp_path):
