@@ -21,7 +21,7 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
-from brdfremap.core.data.errors import ConfigError, RenderError
+from brdfremap.core.data.errors import ConfigError, RenderError, RenderTimeoutError
 from brdfremap.core.data.imageio import HALF_EPS, pixel_format, read_rgb
 from brdfremap.core.protocol import Adapter
 from brdfremap.core.data.scene import ProbeScene
@@ -115,10 +115,13 @@ class SubprocessAdapter(Adapter):
             return self.definition.rgb_format.format(r=f"{v[0]:.9g}", g=f"{v[1]:.9g}", b=f"{v[2]:.9g}")
         return v if isinstance(v, str) else f"{v:.9g}"
 
-    def _fail(self, model, params, what: str, stderr: str = "") -> RenderError:
+    def _fail(self, model, params, what: str, stderr: str = "", timed_out: float | None = None) -> RenderError:
+        """The error naming the renderer, the material and the renderer's last words; a
+        `RenderTimeoutError` when the render was stopped after ``timed_out`` seconds."""
         shown = ", ".join(f"{k}={format_value(v)}" for k, v in params.items())
         tail = "".join(f"\n  stderr: {line}" for line in stderr.strip().splitlines()[-8:])
-        return RenderError(f"renderer {self.definition.name!r} ({model}: {shown}): {what}{tail}")
+        message = f"renderer {self.definition.name!r} ({model}: {shown}): {what}{tail}"
+        return RenderError(message) if timed_out is None else RenderTimeoutError(message, seconds=timed_out)
 
     def render(self, model: str, params: dict[str, Value], scene: ProbeScene, lobe: str | None = None) -> np.ndarray:
         d = self.definition
@@ -136,7 +139,8 @@ class SubprocessAdapter(Adapter):
                 try:
                     self.worker.request(request)
                 except RenderError as exc:
-                    raise self._fail(model, p, exc.message) from None
+                    seconds = exc.seconds if isinstance(exc, RenderTimeoutError) else None  # a timeout stays typed
+                    raise self._fail(model, p, exc.message, timed_out=seconds) from None
             else:
                 stderr = self._run_once(model, p, values)
             return self._read(model, p, output, scene, stderr)
@@ -233,7 +237,7 @@ class SubprocessAdapter(Adapter):
             _kill_group(proc)
             out, err = proc.communicate()
             raise self._fail(model, p, f"timed out after {self.definition.timeout:g} s (process group killed)",
-                             err or out) from None
+                             err or out, timed_out=self.definition.timeout) from None
         except BaseException:  # Ctrl-C, SIGTERM: the renderer (and its helpers) stop with remap
             _kill_group(proc)
             proc.communicate()

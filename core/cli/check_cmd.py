@@ -11,8 +11,8 @@ from ..data.scene import LightType
 
 def parser() -> argparse.ArgumentParser:
     p = options.Parser(prog="remap check", description="Check that an adapter keeps the conventions every "
-                       "renderer must share (units, orientation, determinism, lobes, precision, light through a "
-                       "glass); exit 0 only when every check passes.")
+                       "renderer must share (images, units, orientation, determinism, seeds, lobes, precision, light "
+                       "through a glass); exit 0 only when every check passes.")
     p.add_argument("adapter", metavar="ADAPTER", help="an installed adapter's name, or a renderer definition file")
     p.add_argument("--model", action="append", help="check only this model (repeatable; default: every model)")
     p.add_argument("--debug", action="store_true", help="show tracebacks")

@@ -31,5 +31,14 @@ class RenderError(RemapError):
     """A renderer failed to produce an image, or produced an invalid one."""
 
 
+class RenderTimeoutError(RenderError):
+    """A render that did not finish within its time limit, ``seconds``, and was stopped: a fact
+    `remap check` diagnoses (a renderer that does not honour its sample count renders until halted)."""
+
+    def __init__(self, message: str, *, seconds: float, where: str | None = None):
+        self.seconds = seconds
+        super().__init__(message, where=where)
+
+
 class OptimisationError(RemapError):
     """The fit could not run (for example, residuals not finite at the start)."""

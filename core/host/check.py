@@ -2,9 +2,11 @@
 
 Each check renders the probe and compares it with what the conventions say it must be: the
 white Lambertian sphere against the analytic radiance (and, when it is off, the factor: π, 2,
-4π ... name the usual mistakes), the image's orientation under an asymmetric light, bit-identical
-renders for one seed, lobes that sum to the full image, pixel precision and clipping. Every
-result is a row with what to fix; nothing here names a renderer."""
+4π ... name the usual mistakes), the image's orientation under an asymmetric light (a flip, or a
+shift by a pixel or half of one, named as such), bit-identical renders for one seed and different
+ones for two, lobes that sum to the full image, pixel precision and clipping. Every result is a
+row with what to fix, and a render that never ends is a row saying why it likely did not; nothing
+here names a renderer."""
 
 from __future__ import annotations
 
@@ -14,6 +16,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..data.errors import RenderTimeoutError
 from ..data.imageio import HALF_EPS
 from ..data.metrics import beyond_noise, eight_bit, relative_rmse
 from ..data.scene import EnvironmentLight, PointLight, ProbeScene
@@ -36,6 +39,26 @@ FACTORS = {"π": math.pi, "1/π": 1 / math.pi, "2": 2.0, "1/2": 0.5, "4π": 4 * 
 """Scale errors with a usual cause: radiance against irradiance (π), power against intensity (4π)."""
 BRIGHT = 200.0
 """The intensity scale of the clipping check: the sphere's brightest pixels well above 1."""
+NOISY = ProbeScene(resolution=48, spp=4)
+"""The seed check's scene: few samples, so that a sampler's noise shows."""
+CONVERGED = 16
+"""The seed check's second sample count, as a multiple of the first: its noise 4x lower."""
+NOISE_FREE = 1e-3
+"""How far a render may move between ``NOISY.spp`` and ``CONVERGED`` times as many samples (inside the
+sphere) and be noise-free: a fixed supersampling grid moves a few 1e-4, a path tracer's jittered pixels
+about 1e-2 under the probe light and more under an environment."""
+
+TITLES = {
+    "images": "images: RGB float, finite, lit, black background",
+    "units": "units: white Lambertian against the analytic radiance",
+    "orientation": "orientation: an asymmetric light, left from right and up from down",
+    "determinism": "determinism: one seed, the same image",
+    "seed": "seed: two seeds, two images",
+    "lobes": "lobes: diffuse + specular = the full image",
+    "precision": "precision: unclipped 32-bit float pixels",
+    "transmission": "transmission: a smooth glass against its analytic image",
+}
+"""Every check's row name, in the order `run` runs them."""
 
 
 @dataclass(frozen=True)
@@ -56,17 +79,21 @@ def _factor(ratio: float) -> str:
 
 
 def calibration(render: Callable, white: tuple[str, dict] | None) -> Row:
-    name = "units: white Lambertian against the analytic radiance"
+    name = TITLES["units"]
     if white is None:
         return Row(name, None, "no calibration material", "declare a white diffuse material of albedo 0.8 "
                    "(a definition's `calibration: {model: ..., params: {...}}`)")
     img = render(white[0], white[1], CALIBRATION)
-    inner = _symmetric(sphere_hits(CALIBRATION).interior)
+    inner = _inner(CALIBRATION)
     full = analytic_lambert(CALIBRATION, ALBEDO)
-    # Judged on the image as it would be the right way round: a mirrored image is orientation's failure.
-    err = min(relative_rmse(f(full)[inner], img[inner]) for f in (lambda a: a, *_FLIPS.values()))
+    # Judged on the image as it would be placed right: a flipped or shifted image is orientation's
+    # failure, not a units factor (one row low read as "10.92 % off; 1.023x").
+    errors = _placed(full, img, inner)
+    best = min(errors, key=errors.get)
+    err = errors[best]
     if err < CALIBRATION_TOLERANCE:
-        return Row(name, True, f"{err:.2%} from the analytic radiance")
+        placed = "" if best == "as expected" else f" with the image placed right (it is {best}: see orientation)"
+        return Row(name, True, f"{err:.2%} from the analytic radiance{placed}")
     ratio = float(img[inner].sum() / max(full[inner].sum(), 1e-30))
     known = _factor(ratio)
     why = f"{err:.2%} off; the image is {ratio:.4g}x the analytic radiance" + (f" (a factor of {known})" if known else "")
@@ -79,34 +106,68 @@ _FLIPS = {"mirrored left-right": lambda a: a[:, ::-1], "upside down": lambda a: 
           "rotated half a turn": lambda a: a[::-1, ::-1], "transposed": lambda a: np.swapaxes(a, 0, 1)}
 
 
+def _moved(rows: int, columns: int, half: bool = False) -> Callable:
+    """An image moved ``rows`` down and ``columns`` right (half that: the mean of it and the image)."""
+    def move(a: np.ndarray) -> np.ndarray:
+        moved = np.roll(a, (rows, columns), axis=(0, 1))
+        return (a + moved) / 2 if half else moved
+    return move
+
+
+_SHIFTS = {"shifted one row down": _moved(1, 0), "shifted one row up": _moved(-1, 0),
+           "shifted one column right": _moved(0, 1), "shifted one column left": _moved(0, -1),
+           "shifted half a row down": _moved(1, 0, True), "shifted half a row up": _moved(-1, 0, True),
+           "shifted half a column right": _moved(0, 1, True), "shifted half a column left": _moved(0, -1, True)}
+"""An image a pixel or half of one off (pixel centres at i or i + 1 instead of i + 0.5, a film with a
+border row): what it looks like, the analytic image moved so; half a pixel, as the mean of two rows."""
+_PLACEMENTS = {"as expected": lambda a: a, **_FLIPS, **_SHIFTS}
+_FLIP_FIX = "right-handed world, the camera looking down -z with +y up; image row 0 at the top, column 0 at the left"
+_SHIFT_FIX = ("pixel centres at ((j + 0.5)/W, (i + 0.5)/H) of the image plane, row 0 at the top, column 0 at the "
+              "left: no border row or column, no half-pixel offset in the camera or the film")
+
+
 def _symmetric(mask: np.ndarray) -> np.ndarray:
     """The pixels inside the sphere in every flip of the image (a centred sphere: nearly all)."""
     return mask & _FLIPS["rotated half a turn"](mask) & _FLIPS["transposed"](mask)
 
 
+def _inner(scene: ProbeScene) -> np.ndarray:
+    """The pixels inside the sphere in every placement of the image (`_PLACEMENTS`): the symmetric
+    interior, less a pixel all round (what a shift moves in or out)."""
+    m = _symmetric(sphere_hits(scene).interior)
+    return m & np.roll(m, 1, 0) & np.roll(m, -1, 0) & np.roll(m, 1, 1) & np.roll(m, -1, 1)
+
+
+def _placed(want: np.ndarray, img: np.ndarray, inner: np.ndarray, same_total: bool = False) -> dict[str, float]:
+    """How far the image is from the expected one placed each way (`_PLACEMENTS`); with ``same_total``,
+    each placed at the image's total (so that a scale error, units' failure, does not hide the shape)."""
+    errors = {}
+    for k, f in _PLACEMENTS.items():
+        placed = f(want)[inner]
+        if same_total:
+            placed = placed * float(img[inner].sum() / max(float(placed.sum()), 1e-30))
+        errors[k] = relative_rmse(placed, img[inner])
+    return errors
+
+
 def orientation(render: Callable, white: tuple[str, dict] | None) -> Row:
-    """A light upper left in front (+x right, +y up in the image): which flip of the analytic image
-    the render is nearest to."""
-    name = "orientation: an asymmetric light, left from right and up from down"
+    """A light upper left in front (+x right, +y up in the image): which placement of the analytic
+    image (as it is, flipped, shifted by a pixel or half of one) the render is nearest to."""
+    name = TITLES["orientation"]
     if white is None:
         return Row(name, None, "no calibration material", "declare one (see units)")
     scene = SCENE.model_copy(update={"lights": [PointLight(theta=50.0, phi=150.0)]})
     img = render(white[0], white[1], scene)
-    want, inner = analytic_lambert(scene, ALBEDO), _symmetric(sphere_hits(scene).interior)
-    # Compared at the same total, so that a scale error (units' failure) does not hide the shape.
-    img = img * float(want[inner].sum() / max(float(img[inner].sum()), 1e-30))
-    errors = {"as expected": relative_rmse(want[inner], img[inner]),
-              **{k: relative_rmse(f(want)[inner], img[inner]) for k, f in _FLIPS.items()}}
+    errors = _placed(analytic_lambert(scene, ALBEDO), np.asarray(img, np.float64), _inner(scene), same_total=True)
     best = min(errors, key=errors.get)
     if best == "as expected":
         return Row(name, True, f"{errors[best]:.2%} from the expected image (scaled to its total)")
     return Row(name, False, f"the image is {best} ({errors[best]:.2%} from that, {errors['as expected']:.2%} from "
-               "the expected one)", "right-handed world, the camera looking down -z with +y up; image row 0 at the top, "
-               "column 0 at the left")
+               "the expected one)", _SHIFT_FIX if best in _SHIFTS else _FLIP_FIX)
 
 
 def determinism(render: Callable, models: dict) -> Row:
-    name = "determinism: one seed, the same image"
+    name = TITLES["determinism"]
     for model, spec in models.items():
         p = spec.complete({})
         if not np.array_equal(render(model, p, SCENE), render(model, p, SCENE)):
@@ -115,10 +176,44 @@ def determinism(render: Callable, models: dict) -> Row:
     return Row(name, True, f"{len(models)} model(s), bit for bit")
 
 
+SEED_FIX = ("pass the scene's seed to the renderer's sampler; a renderer that ignores it makes every noise floor 0 "
+            "and every verdict is judged against no noise")
+
+
+def seed(render: Callable, white: tuple[str, dict] | None, environment: bool = False) -> Row:
+    """Two seeds, two images: the tool measures a render's noise as the difference of two seeds'
+    renders, and a renderer that ignores its seed makes that 0.
+
+    The rule: the white Lambertian at few samples (`NOISY`; under the studio environment where the
+    adapter renders one, whose sampling is noisy in any Monte Carlo renderer) must differ between
+    seeds 0 and 1, unless the renderer has no sampling noise at all. When the two are identical it
+    is rendered at `CONVERGED` times the samples: an image that does not move with the sample count
+    either (within `NOISE_FREE`: an analytic or rasterised one, noise-free by design, its noise
+    floor of 0 true) passes; one that does samples, and ignores its seed: it fails."""
+    name = TITLES["seed"]
+    if white is None:
+        return Row(name, None, "no calibration material", "declare one (see units)")
+    scene = NOISY.model_copy(update={"lights": [EnvironmentLight(type="environment", map="studio")]}) \
+        if environment else NOISY
+    inner = _inner(scene)
+    first, second = (np.asarray(render(white[0], white[1], scene.with_(seed=s)), np.float64) for s in (0, 1))
+    if not np.array_equal(first, second):
+        return Row(name, True, f"seeds 0 and 1 are {relative_rmse(first[inner], second[inner]):.2%} apart at "
+                   f"{scene.spp} spp")
+    more = scene.spp * CONVERGED
+    moved = relative_rmse(np.asarray(render(white[0], white[1], scene.with_(spp=more)), np.float64)[inner],
+                          first[inner])
+    if moved < NOISE_FREE:
+        return Row(name, True, f"one image for seeds 0 and 1, and within {moved:.2%} of it at {more} spp: no "
+                   "sampling noise, so a noise floor of 0 is true")
+    return Row(name, False, f"seeds 0 and 1 give the same image, which has sampling noise (it moves {moved:.2%} at "
+               f"{more} spp instead of {scene.spp})", SEED_FIX)
+
+
 def images(render: Callable, models: dict, environment: bool = True) -> Row:
     """Each model's image at the probe (a perfectly smooth one under the studio where the adapter
     renders an environment: ``environment``, as a fit would see it)."""
-    name = "images: RGB float, finite, lit, black background"
+    name = TITLES["images"]
     n = SCENE.resolution
     for model, spec in models.items():
         img = np.asarray(render(model, spec.complete({}), scene_for(spec, SCENE, environment)))
@@ -133,7 +228,7 @@ def images(render: Callable, models: dict, environment: bool = True) -> Row:
 
 
 def lobes(render: Callable, models: dict) -> Row:
-    name = "lobes: diffuse + specular = the full image"
+    name = TITLES["lobes"]
     checked = 0
     for model, spec in models.items():
         if not spec.has_lobes or any(lobe.empty for lobe in spec.lobes.values()):
@@ -153,7 +248,7 @@ def lobes(render: Callable, models: dict) -> Row:
 
 def precision(render: Callable, white: tuple[str, dict] | None) -> Row:
     """Clipping at 1 (an 8-bit image) under a light bright enough to exceed it, and half floats."""
-    name = "precision: unclipped 32-bit float pixels"
+    name = TITLES["precision"]
     if white is None:
         return Row(name, None, "no calibration material", "declare one (see units)")
     light = SCENE.point_lights[0]
@@ -183,7 +278,7 @@ def transmission(render: Callable, models: dict, glass: tuple[str, dict] | None,
                  limit: str = "") -> Row:
     """Light through a sphere: a clear smooth glass of IOR 1.5 against its analytic image under the studio
     environment (paths deep enough to enter and leave it; what is seen through it, the same)."""
-    name = "transmission: a smooth glass against its analytic image"
+    name = TITLES["transmission"]
     through = sorted(m for m, spec in models.items() if spec.transmits or spec.transmits_with)
     if not through:
         return Row(name, True, "no model lets light through")
@@ -205,13 +300,33 @@ def transmission(render: Callable, models: dict, glass: tuple[str, dict] | None,
                "for internal reflections), show the environment through it, and hit the sphere from inside")
 
 
+HANG_FIX = ("the renderer likely does not honour the sample count it is given (a progressive or tile engine renders "
+            "until it is halted): map the scene's samples (`{spp}` in a definition) to its halt condition; a render "
+            "that is only slow needs a longer `timeout`")
+
+
 def run(render: Callable, models: dict, white: tuple[str, dict] | None, glass: tuple[str, dict] | None = None,
         environment: bool = False, transmission_limit: str = "") -> list[Row]:
-    """Every check; ``render(model, params, scene, lobe=None) -> image``."""
-    first = images(render, models, environment)
-    if not first.passed:  # the others index the image: say they did not run rather than fail on its shape
-        return [first] + [Row(name, None, "not run: the images are not right (see images)") for name in (
-            "units", "orientation", "determinism", "lobes", "precision", "transmission")]
-    return [first, calibration(render, white), orientation(render, white),
-            determinism(render, models), lobes(render, models), precision(render, white),
-            transmission(render, models, glass, environment, transmission_limit)]
+    """Every check (`TITLES`); ``render(model, params, scene, lobe=None) -> image``. A check one of
+    whose renders did not finish (`RenderTimeoutError`) is a failed row with the likely cause, and the
+    checks after it do not run (each would wait as long)."""
+    checks = {"images": lambda: images(render, models, environment),
+              "units": lambda: calibration(render, white), "orientation": lambda: orientation(render, white),
+              "determinism": lambda: determinism(render, models), "seed": lambda: seed(render, white, environment),
+              "lobes": lambda: lobes(render, models), "precision": lambda: precision(render, white),
+              "transmission": lambda: transmission(render, models, glass, environment, transmission_limit)}
+    rows: list[Row] = []
+    stopped: str | None = None  # why the checks left do not run
+    for key, check in checks.items():
+        if stopped is not None:
+            rows.append(Row(TITLES[key], None, f"not run: {stopped}"))
+            continue
+        try:
+            row = check()
+        except RenderTimeoutError as exc:
+            row = Row(TITLES[key], False, f"a render did not finish in {exc.seconds:g} s (it was stopped)", HANG_FIX)
+            stopped = f"a render did not finish (see {key})"
+        if key == "images" and not row.passed:  # the others index the image: not run rather than failed on its shape
+            stopped = stopped or "the images are not right (see images)"
+        rows.append(row)
+    return rows

@@ -35,7 +35,8 @@ class AdapterContract:
 
     The conventions are `remap check`'s own checks (`core.host.check`), a test each: images (shape,
     float, finite, lit, black background), units (the white Lambertian against the analytic
-    radiance), orientation, determinism, lobes, precision and light through a glass. Besides them,
+    radiance), orientation, determinism, seeds (two seeds, two images, unless the renderer has no
+    sampling noise), lobes, precision and light through a glass. Besides them,
     what needs pytest: the models and their derived quantities declared, the optional neutral
     reading naming only model parameters, one seed giving the same image in a second instance of
     the adapter, and each light type it declares against the analytic radiance.
@@ -103,6 +104,9 @@ class AdapterContract:
 
     def test_determinism(self):
         self._holds(check.determinism(self._render, self.adapter.models))
+
+    def test_seed(self):
+        self._holds(check.seed(self._render, self._white(), LightType.ENVIRONMENT in self.factory.light_types))
 
     def test_lobes(self):
         self._holds(check.lobes(self._render, self.adapter.models))

@@ -18,7 +18,7 @@ import time
 import weakref
 from typing import Any
 
-from ..data.errors import RenderError
+from ..data.errors import RenderError, RenderTimeoutError
 
 
 def _prctl():
@@ -84,7 +84,10 @@ class JsonLinesWorker:
         self._stderr_pump = threading.Thread(target=self._pump_stderr, args=(self.proc.stderr, self._stderr),
                                              daemon=True)
         self._stderr_pump.start()
-        self.hello = self._read(self.start_timeout, "start")
+        try:
+            self.hello = self._read(self.start_timeout, "start")
+        except RenderTimeoutError as exc:  # a slow start, not a render that never ends
+            raise RenderError(exc.message, where=self.name) from None
         if not self.hello.get("ok"):
             err = self.hello.get("error", "no greeting")
             self.close()
@@ -147,8 +150,8 @@ class JsonLinesWorker:
             if left <= 0:
                 if self.proc is not None:
                     self._kill(self.proc)
-                raise RenderError(f"no answer to {what} within {timeout:.0f} s (worker killed){self._tail()}",
-                                  where=self.name)
+                raise RenderTimeoutError(f"no answer to {what} within {timeout:.0f} s (worker killed){self._tail()}",
+                                         seconds=timeout, where=self.name)
             try:
                 line = self._lines.get(timeout=min(left, 0.5))
             except queue.Empty:
