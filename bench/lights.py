@@ -20,14 +20,17 @@ from brdfremap.core.data.metrics import relative_rmse
 from brdfremap.core.host.plugins import collect_adapters
 from brdfremap.core.data.scene import EnvironmentLight, PointLight, ProbeScene
 from brdfremap.core.testing import analytic_lambert, sphere_hits
-from brdfremap.core.job.validation import CONDITIONS
+from brdfremap.core.job.validation import CONDITIONS, place_disc
 
 WHITE = {"mitsuba": ("diffuse", {"reflectance": 0.8}), "cycles": ("diffuse", {"color": 0.8})}
 
 
 def lights() -> list[tuple[str, list]]:
     out = [("probe (point, 45 degrees)", [PointLight()])]
-    out += [(f"{c.label} (validation)", [c.light]) for c in CONDITIONS if isinstance(c.light, PointLight)]
+    out += [(f"{c.label} (validation)", list(c.lights)) for c in CONDITIONS if c.disc]
+    probe = ProbeScene()
+    out += [(f"{d.label} (validation, for sharp materials)", [place_disc(d.lights[0], probe)])
+            for d in (c.as_disc() for c in CONDITIONS if c.disc)]
     out += [("two point lights (45 and 100 degrees)", [PointLight(), PointLight(theta=100.0, phi=10.0, intensity=15.0)]),
             ("constant environment (radiance 0.35)", [EnvironmentLight(type="environment", map="constant", scale=0.35)]),
             ("studio environment (validation)", [EnvironmentLight(type="environment", map="studio")])]
@@ -46,7 +49,7 @@ def main() -> None:
             "|---|---|---|---|---|---|---|"]
     try:
         for name, ls in lights():
-            env = any(isinstance(x, EnvironmentLight) for x in ls)
+            env = any(isinstance(x, EnvironmentLight) for x in ls)  # discs too: Cycles samples them as a world
             scene = ProbeScene(lights=ls, resolution=args.resolution, spp=args.spp * (4 if env else 1))
             inner = sphere_hits(scene).interior
             ref = analytic_lambert(scene, 0.8)[inner]

@@ -11,7 +11,10 @@ straight up, the left and right edges look away from the camera (-z), the centre
 looks back at it (+z), and the left half is +x. Pixel values are linear RGB radiance
 (W m⁻² sr⁻¹). A map is a file (EXR or HDR, 2:1) or one the project generates itself:
 ``studio`` (a key, a fill and a rim light over a dim gradient, asymmetric in every axis) and
-``constant`` (radiance 1 everywhere: a white Lambertian under it has radiance 1 exactly).
+``constant`` (radiance 1 everywhere: a white Lambertian under it has radiance 1 exactly), and
+the discs (`DISCS`): one round light of finite size, far away, in the direction of one of the
+held-out point lights (a point light shows a near-mirror's highlight smaller than a pixel; a
+disc shows it as the disc's image, which a few samples resolve).
 
 `realise` writes the map with its scale and rotation applied to a scratch EXR that adapters
 hand their renderer (one per process, content-addressed, so every process renders the same)."""
@@ -21,13 +24,13 @@ from __future__ import annotations
 import functools
 import hashlib
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from .errors import ConfigError
 
-BUILTIN = ("studio", "constant")
 MAP_VERSION = 1
 """Bump when a built-in map or the realisation changes (it is in every scene's cache key)."""
 MIN_SIZE = (8, 4)
@@ -77,7 +80,48 @@ def constant(width: int = 64) -> np.ndarray:
     return np.ones((width // 2, width, 3), dtype=np.float32)
 
 
-_BUILTINS = {"studio": studio, "constant": constant}
+DISC_RADIUS = 12.0
+"""A disc light's angular radius, degrees: a soft box's, about. A mirror sphere shows it as a highlight
+about 4 pixels across at the probe's 128 px (resolved by tens of samples), where a point light's is a
+fraction of one; its edge is a 2-degree ramp (a quarter of the map's pixel pitch in it)."""
+DISC_EDGE = 2.0
+
+
+@dataclass(frozen=True)
+class Disc:
+    """A disc light's direction, as a point light's is written: ``theta`` from the view axis (+z),
+    ``phi`` in the image plane from +x towards +y, degrees."""
+
+    theta: float
+    phi: float
+
+    @property
+    def direction(self) -> tuple[float, float, float]:
+        t, p = math.radians(self.theta), math.radians(self.phi)
+        return (math.sin(t) * math.cos(p), math.sin(t) * math.sin(p), math.cos(t))
+
+
+DISCS = {"probe-disc": Disc(45.0, 125.0), "grazing-disc": Disc(80.0, 125.0), "rim-disc": Disc(120.0, 125.0),
+         "headlight-disc": Disc(0.0, 125.0), "back-disc": Disc(100.0, 305.0)}
+"""The built-in discs: where the probe's light, the held-out grazing, rim and head lights, and the fit's
+back light are (`core.job.validation`, `core.job.fitscene`)."""
+
+
+def disc(where: Disc, width: int = 512) -> np.ndarray:
+    """One disc of white light, `DISC_RADIUS` across, black elsewhere, its radiance set so that it gives
+    an irradiance of 1 on a surface facing it (summed over the map's pixels, as a renderer integrates
+    them): ``scale`` is then the irradiance, as a point light's I / r² is."""
+    d = pixel_directions(width, width // 2)
+    lobe = _lobe(d, where.direction, DISC_RADIUS, DISC_EDGE)
+    h = width // 2
+    solid = (2 * math.pi / width) * (math.pi / h) * np.sin(math.pi * (np.arange(h) + 0.5) / h)[:, None]
+    cosine = np.clip((d * np.asarray(where.direction)).sum(-1), 0.0, None)
+    irradiance = float((lobe * cosine * solid).sum())
+    return np.repeat((lobe / irradiance)[..., None], 3, axis=-1).astype(np.float32)
+
+
+_BUILTINS = {"studio": studio, "constant": constant,
+             **{name: functools.partial(disc, where) for name, where in DISCS.items()}}
 
 
 def is_builtin(name: str) -> bool:

@@ -97,6 +97,9 @@ class Validation:
 
     checks: list[Check] = field(default_factory=list)
     skipped: dict[str, str] = field(default_factory=dict)
+    scenes: dict[str, tuple] = field(default_factory=dict)
+    """Each checked condition's two scenes as rendered (its lights, samples, seeds): what the renderers'
+    own agreement is measured on there."""
 
 
 @dataclass

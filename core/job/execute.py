@@ -24,7 +24,7 @@ from ..data.atomic import why
 from ..data.errors import RemapError, RenderError
 from ..data.findings import SmoothHeld
 from ..data.imageio import write_exr, write_previews
-from ..data.schemas import ParamKind, Value
+from ..data.schemas import Lobe, ParamKind, Value
 from ..data.settings import FitScene, Inputs, Start
 from ..engine import ProgressFn, remap
 from ..host.plugins import AdapterRegistry, collect_adapters
@@ -34,7 +34,8 @@ from .job import Job, Resolved, resolve
 from .renders import CachedRenderer, ProbeRenders
 from .report import FileRecord, Report, build_report
 from .texturing import Texturing, texture_result, textured_findings
-from ..data.scene import LightType
+from ..data.scene import LightType, ProbeScene
+from ..engine.schedule import highlight_pixels
 
 
 IMAGES = ("source.exr", "target.exr", "source.png", "target.png", "error.png")
@@ -108,6 +109,14 @@ def run_job(job: Job, renderer_files: tuple[str, ...] = (), progress: ProgressFn
         return execute(resolve(job, pool.registry), pool, progress)
 
 
+def source_highlight(source: CachedRenderer, resolved: Resolved, scene: ProbeScene) -> float:
+    """The pixels the source's highlight covers on ``scene`` (`highlight_pixels`): of its specular lobe
+    where it isolates one (a plastic's, not its diffuse shading), else of its image."""
+    spec = resolved.source_spec.lobes.get(Lobe.SPECULAR)
+    lobe = Lobe.SPECULAR if spec is not None and not spec.empty else None
+    return highlight_pixels(source(resolved.source_params, lobe, scene=scene))
+
+
 def fit_policy(job: Job) -> str:
     """`Settings.fit_scene`, but a table's lookup is judged on the scene its direct fits saw: without
     the back light's view (tables are built on the job's scene alone: `Settings.for_study`)."""
@@ -131,9 +140,10 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
                            job.settings.resolve_limit, fit_policy(job),
                            smooth=resolved.source_spec.is_smooth(resolved.source_params) or resolved.target_spec.smooth,
                            transmissive=resolved.source_spec.transmissive(resolved.source_params),
-                           source_smooth=resolved.source_spec.is_smooth(resolved.source_params))
+                           source_smooth=resolved.source_spec.is_smooth(resolved.source_params),
+                           highlight=lambda sc: source_highlight(source, resolved, sc))
     renders = ProbeRenders(source, resolved.source_params, resolved.source_spec, target, fit.scene, given=job.scene,
-                           given_noise=fit.scene_noise, resolve_limit=job.settings.resolve_limit)
+                           given_noise=fit.scene_noise, resolve_limit=job.settings.resolve_limit, sharp=fit.sharp)
     informed = job.settings.start == Start.INFORMED and job.lookup is None and job.start is None
     smooth = smooth_held(resolved) if job.lookup is None else {}
     start = {**(informed_start(resolved, adapters) if informed else given_start(resolved)), **smooth}

@@ -28,11 +28,16 @@ import numpy as np
 from ..data.metrics import l2, relative_rmse
 from ..data.scene import MAX_SPP, EnvironmentLight, PointLight, ProbeScene, View
 from ..data.settings import FitScene as Policy
-from .validation import place_light
+from ..data.environment import DISC_RADIUS
+from .validation import disc_for, place_light
 
 GOAL = 0.03
 """The source noise (relative RMSE between two seeds) a fit scene should reach."""
 MAX_SPP_FACTOR = 16
+SHARP_PX = 8.0
+"""A source whose highlight under the scene's point light carries half its light in fewer pixels than this
+is sharp (a GGX metal below about alpha 0.03: alpha 0.01 in 2 pixels, 0.05 in 18): fitted and judged with
+its point lights as discs (`_discs`), which show such a highlight as the disc's image."""
 ENV_MIN_RESOLUTION = 32
 """A perfectly smooth (or near-mirror, opaque) source's studio fit scene is half the job's resolution, at least this: a
 quarter of the cost. The samples it takes to resolve it (up to 16 times the scene's) made these
@@ -52,6 +57,9 @@ class FitScene:
     """The source's noise there (relative RMSE between two seeds)."""
     scene_noise: float = 0.0
     """The source's noise on the job's scene."""
+    sharp: bool = False
+    """The fit runs with the scene's point light as a disc (`_discs`): its held-out point lights are
+    discs too (`core.job.validation.held_out_scenes`)."""
 
 
 def source_noise(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene) -> float:
@@ -70,12 +78,12 @@ def _samples_for(noise: float, spp: int) -> int:
 
 def choose(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, environment_ok: bool,
            limit: float, policy: Policy = Policy.AUTO, smooth: bool = False, transmissive: bool = False,
-           source_smooth: bool = False) -> FitScene:
+           source_smooth: bool = False, highlight: Callable[[ProbeScene], float] | None = None) -> FitScene:
     """The fit scene (`choose_lights`; one-view chooses as auto does), with the back light's view where
     ``policy`` is auto and the chosen scene is one of point lights that resolves the source."""
     back_view = policy == Policy.AUTO
     found = choose_lights(render, scene, environment_ok, limit, Policy.AUTO if back_view else policy, smooth,
-                          transmissive, source_smooth)
+                          transmissive, source_smooth, highlight)
     if not back_view or transmissive or found.scene.views or found.scene.environment is not None \
             or not found.noise <= limit:
         return found
@@ -127,7 +135,7 @@ def with_back_light(render: Callable[[ProbeScene], np.ndarray], found: FitScene,
 
 def choose_lights(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene, environment_ok: bool,
                   limit: float, policy: Policy = Policy.AUTO, smooth: bool = False, transmissive: bool = False,
-                  source_smooth: bool = False) -> FitScene:
+                  source_smooth: bool = False, highlight: Callable[[ProbeScene], float] | None = None) -> FitScene:
     """The fit scene for a source rendered by ``render(scene)``; ``environment_ok``: both adapters
     render the studio environment; ``limit``: the noise above which a scene cannot resolve;
     ``policy``: `Settings.fit_scene`; ``smooth``: the source or the target is a mirror or a smooth
@@ -135,10 +143,22 @@ def choose_lights(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene,
     source lets light through (a point light reaches what is seen through it by rare paths only:
     a rough glass is 70-130 % noise under the probe at 16 spp, 10-15 % under the studio at 256);
     ``source_smooth``: the source itself is smooth (the studio then at half the size: a rough glass
-    fitted to a smooth target keeps the full size)."""
+    fitted to a smooth target keeps the full size); ``highlight(scene)``: the pixels the source's
+    highlight covers there (`core.engine.schedule.highlight_pixels`), which says a sharp one (`SHARP_PX`).
+    An opaque smooth or sharp source is fitted with its point light as a disc (`_discs`) where one is
+    built in its direction."""
     if policy == Policy.AS_GIVEN:
         return FitScene(scene)
     noise = source_noise(render, scene)
+    if policy == Policy.AUTO and environment_ok and not transmissive and not scene.views and \
+            scene.environment is None and (smooth or (math.isfinite(noise) and highlight is not None and
+                                                       highlight(scene) < SHARP_PX)):
+        why = "a perfectly smooth material (it shows a point light as a point at most)" if smooth else \
+            f"a highlight smaller than {SHARP_PX:g} pixels under the scene's point light ({noise:.1%} noise " \
+            f"at {scene.spp} spp)"
+        found = _discs(render, scene, noise, limit, why)
+        if found is not None:
+            return found
     if (smooth or noise == math.inf or (transmissive and noise > GOAL)) and policy == Policy.AUTO and environment_ok \
             and scene.environment is None and not scene.views:
         # Taken however noisy: under the point lights there is nothing (or less) to fit (the verdict says how noisy).
@@ -169,23 +189,47 @@ def choose_lights(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene,
     return FitScene(scene, noise=noise, scene_noise=noise)
 
 
+def _discs(render, scene: ProbeScene, noise: float, limit: float, why: str) -> FitScene | None:
+    """The scene with its point light as the built-in disc in its direction (`disc_for`), at half its
+    resolution (at least `ENV_MIN_RESOLUTION`: the disc's image on a mirror is about 8 pixels across
+    there) and the samples that bring the source's noise to GOAL; None where the scene's lights have
+    no disc (more than one, or one in a direction none is built in) or the disc cannot resolve it."""
+    discs = [disc_for(x, scene) for x in scene.point_lights]
+    if len(scene.lights) != 1 or None in discs:
+        return None
+    found = _resolved(render, scene.model_copy(update={
+        "lights": discs, "resolution": min(scene.resolution, max(ENV_MIN_RESOLUTION, scene.resolution // 2)),
+        "name": f"{scene.name}, its light as a disc"}), limit)
+    if found is None:
+        return None
+    disc, n = found
+    return FitScene(disc, f"{why}: fitted with the light as a disc {2 * DISC_RADIUS:g} degrees across, where it "
+                          f"is, at {disc.spp} spp ({n:.1%})", n, noise if math.isfinite(noise) else 0.0, sharp=True)
+
+
+def _resolved(render, scene: ProbeScene, limit: float) -> tuple[ProbeScene, float] | None:
+    """``scene`` at the samples that bring the source's noise to GOAL (up to MAX_SPP_FACTOR times
+    more) and that noise; None where the source is black there or its noise stays over ``limit``."""
+    n = source_noise(render, scene)
+    if math.isinf(n):
+        return None
+    if n > GOAL:
+        scene = scene.with_(spp=min(_samples_for(n, scene.spp), scene.spp * MAX_SPP_FACTOR))
+        n = source_noise(render, scene)
+    return None if n > limit else (scene, n)
+
+
 def _environment(render, scene: ProbeScene, noise: float, limit: float, why: str,
                  half: bool = False) -> FitScene | None:
     """The scene under the studio environment (``half``: at half its resolution, at least
     `ENV_MIN_RESOLUTION`), with the samples that bring the source's noise to GOAL (up to
     MAX_SPP_FACTOR times more), or None when it cannot resolve the source either."""
     res = max(ENV_MIN_RESOLUTION, scene.resolution // 2) if half else scene.resolution
-    env = scene.model_copy(update={"lights": [EnvironmentLight(type="environment", map="studio")],
-                                   "resolution": min(res, scene.resolution),
-                                   "name": f"{scene.name} under the studio environment"})
-    n = source_noise(render, env)
-    if math.isinf(n):  # black there too: nothing to fit anywhere
+    found = _resolved(render, scene.model_copy(update={
+        "lights": [EnvironmentLight(type="environment", map="studio")], "resolution": min(res, scene.resolution),
+        "name": f"{scene.name} under the studio environment"}), limit)
+    if found is None:
         return None
-    if n > GOAL:
-        spp = min(_samples_for(n, env.spp), env.spp * MAX_SPP_FACTOR)
-        env = env.with_(spp=spp)
-        n = source_noise(render, env)
-    if n > limit:
-        return None
+    env, n = found
     return FitScene(env, f"{why}: fitted under the studio environment at {env.spp} spp ({n:.1%}), which lights "
                          "it from every side", n, noise if math.isfinite(noise) else 0.0)

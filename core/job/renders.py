@@ -21,7 +21,7 @@ from ..engine.schedule import highlight_pixels
 from ..host.protocol import Adapter, check_image
 from .agreement import agreement, reference_kind
 from .cache import RenderCache, render_key
-from .validation import held_out_scenes, point_resolution, validate
+from .validation import point_resolution, validate
 
 
 def _round(v: Value) -> Value:
@@ -110,12 +110,15 @@ class ProbeRenders:
 
     def __init__(self, source: CachedRenderer, source_params: dict[str, Value], source_spec: ModelSpec,
                  target: CachedRenderer, scene: ProbeScene, given: ProbeScene | None = None,
-                 given_noise: float = 0.0, resolve_limit: float | None = None):
+                 given_noise: float = 0.0, resolve_limit: float | None = None, sharp: bool = False):
         self.source, self.source_params, self.source_spec = source, dict(source_params), source_spec
         self.target, self.scene = target, scene
         self.job_scene = given if given is not None else scene
         """The job's scene: the held-out lights take its camera, size and samples."""
-        self.other_lights = _first_view(self.job_scene.with_(spp=scene.spp)) != _first_view(scene)
+        self.sharp = sharp
+        """The fit ran with the job's point light as a disc (`core.job.fitscene`): the held-out point
+        lights are discs too, and the job's own (which cannot resolve the source) are not checked."""
+        self.other_lights = not sharp and _first_view(self.job_scene.with_(spp=scene.spp)) != _first_view(scene)
         """The fit ran under other lights than the job's (`core.job.fitscene`): those are checked too.
         (A fit at more samples of the same lights, or with a back light's view added below them,
         measured the job's scene already.)"""
@@ -182,7 +185,7 @@ class ProbeRenders:
         return validate(lambda sc: self.source(self.source_params, scene=sc), lambda sc: self.target(params, scene=sc),
                         self.job_scene, problems, given=self.other_lights,
                         given_noise=self.given_noise, fit_lights=self.scene.view_scenes()[0].lights,
-                        resolution=self.point_resolution(), resolve_limit=self.resolve_limit)
+                        resolution=self.point_resolution(), resolve_limit=self.resolve_limit, sharp=self.sharp)
 
     def point_resolution(self) -> int:
         """The frontal point-light conditions' resolution, from the source's highlight (its specular
@@ -204,10 +207,7 @@ class ProbeRenders:
         first = self.scene.view_scenes()[0]  # adapters render one view at a time
         fit = (first.with_(seed=first.seed + 2), first.with_(seed=first.seed + 3))
         conditions = [(Lighting.SCENE, "fit scene", fit)] + [
-            (c.name, c.label, (a, b)) for c, a, b in held_out_scenes(self.job_scene, self.other_lights,
-                                                                       self.scene.view_scenes()[0].lights,
-                                                                       self.point_resolution())
-            if c.name in {k.condition for k in validation.checks}]
+            (c.condition, c.label, validation.scenes[c.condition]) for c in validation.checks]
         kind = reference_kind(self.source.adapter.appearance(self.source.model, self.source_params))
         return agreement(self.source.adapter, self.target.adapter, transmissive, conditions, threshold, judged, kind)
 

@@ -11,12 +11,14 @@ the noise does not explain (`metrics.beyond_noise`)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import functools
+from dataclasses import dataclass, replace
 
 import numpy as np
 from pydantic import ValidationError
 
 from ..data.metrics import beyond_noise, delta_e_itp, relative_rmse
+from ..data.environment import DISC_RADIUS, DISCS
 from ..data.scene import EnvironmentLight, Lighting, MAX_SEED, MAX_SPP, PointLight, ProbeScene
 from ..engine.results import Check, Validation
 
@@ -34,15 +36,28 @@ class Condition:
     lights: tuple[PointLight | EnvironmentLight, ...]
     given: bool = False
     """The job's own lights, when the fit ran under others (`core.job.fitscene`)."""
+    disc: str = ""
+    """The built-in disc map (`core.data.environment.DISCS`) that stands in for this condition's point
+    light where that cannot resolve the material: empty for none."""
+
+    def as_disc(self, measured: str = "") -> Condition:
+        """This condition under a disc light of finite size where its point light is, at the same
+        irradiance on the sphere (`place_disc`); ``measured``: what the point light showed."""
+        across = 2 * DISC_RADIUS
+        why = f"; the point light: {measured}" if measured else ""
+        return Condition(self.name, f"{self.label} as a disc {across:g} degrees across",
+                         f"{self.description}; a disc light {across:g} degrees across in its place (a point light "
+                         f"shows this material's highlight smaller than a pixel{why})",
+                         (EnvironmentLight(type="environment", map=self.disc),))
 
 
 CONDITIONS = (
     Condition(Lighting.GRAZING, "grazing light", "a point light 80 degrees from the view: light skimming across the sphere",
-              (PointLight(theta=80.0),)),
+              (PointLight(theta=80.0),), disc="grazing-disc"),
     Condition(Lighting.RIM, "rim light", "a point light 120 degrees from the view, behind the sphere: a lit rim",
-              (PointLight(theta=120.0),)),
+              (PointLight(theta=120.0),), disc="rim-disc"),
     Condition(Lighting.HEADLIGHT, "headlight", "a point light on the view axis, in front of the sphere",
-              (PointLight(theta=0.0),)),
+              (PointLight(theta=0.0),), disc="headlight-disc"),
     Condition(Lighting.ENVIRONMENT, "studio environment", "the built-in studio environment (key, fill and rim lights)",
               (EnvironmentLight(type="environment", map="studio"),)),
 )
@@ -61,17 +76,22 @@ TURNED = 180.0
 """The studio's rotation when the fit itself ran under the studio: held out, it must be other light."""
 
 
+def _reference(scene: ProbeScene) -> tuple[float, float]:
+    """The distance from the sphere's centre and the intensity of the scene's first point light, or the
+    default probe's scaled to the sphere's radius."""
+    ref = next(iter(scene.point_lights), None)
+    if ref is not None:
+        return float(np.linalg.norm(np.asarray(ref.position) - np.asarray(scene.sphere.center))), ref.intensity
+    dist = DEFAULT.r * scene.sphere.radius / 2.0
+    return dist, DEFAULT.intensity * (dist / DEFAULT.r) ** 2
+
+
 def place_light(light: PointLight, scene: ProbeScene) -> PointLight:
     """A condition's light about the scene's sphere (its angles from the view axis, as written),
     at the distance and intensity of the scene's first point light, or the default probe's scaled
     to the sphere's radius."""
     centre = np.asarray(scene.sphere.center, np.float64)
-    ref = next(iter(scene.point_lights), None)
-    if ref is not None:
-        dist, intensity = float(np.linalg.norm(np.asarray(ref.position) - centre)), ref.intensity
-    else:
-        dist = DEFAULT.r * scene.sphere.radius / 2.0
-        intensity = DEFAULT.intensity * (dist / DEFAULT.r) ** 2
+    dist, intensity = _reference(scene)
     t, ph = np.radians(light.theta), np.radians(light.phi)
     pos = centre + dist * np.array([np.sin(t) * np.cos(ph), np.sin(t) * np.sin(ph), np.cos(t)])
     r = float(np.linalg.norm(pos))
@@ -79,18 +99,45 @@ def place_light(light: PointLight, scene: ProbeScene) -> PointLight:
                       phi=float(np.degrees(np.arctan2(pos[1], pos[0]))), intensity=intensity)
 
 
+def is_disc(light) -> bool:
+    return isinstance(light, EnvironmentLight) and light.map in DISCS
+
+
+def place_disc(light: EnvironmentLight, scene: ProbeScene) -> EnvironmentLight:
+    """A disc light at the irradiance the scene's first point light gives the sphere's centre (I / r²):
+    a disc map's scale is its irradiance (`core.data.environment.disc`)."""
+    dist, intensity = _reference(scene)
+    return light.model_copy(update={"scale": float(f"{intensity / dist ** 2:.6g}")})
+
+
+def disc_for(light: PointLight, scene: ProbeScene) -> EnvironmentLight | None:
+    """The built-in disc (`DISCS`) in this point light's direction from the sphere's centre (within half a
+    degree), at its irradiance there (I / r²); None where no disc is built in that direction."""
+    offset = np.asarray(light.position) - np.asarray(scene.sphere.center)
+    dist = float(np.linalg.norm(offset))
+    for name, where in DISCS.items():
+        if float(np.dot(offset / dist, where.direction)) > np.cos(np.radians(0.5)):
+            return EnvironmentLight(type="environment", map=name, scale=float(f"{light.intensity / dist ** 2:.6g}"))
+    return None
+
+
+def _placed(light, scene: ProbeScene):
+    return place_light(light, scene) if isinstance(light, PointLight) else \
+        place_disc(light, scene) if is_disc(light) else light
+
+
 def _held_out(c: Condition, scene: ProbeScene, fit_keys: list) -> Condition:
-    """The condition as rendered for this scene: point lights placed about its sphere; the studio
-    turned round when the fit saw the studio itself."""
+    """The condition as rendered for this scene: point lights and discs placed about its sphere; the
+    studio turned round when the fit saw the studio itself."""
     if c.given:
         return c
-    lights = tuple(place_light(x, scene) if isinstance(x, PointLight) else x for x in c.lights)
+    lights = tuple(_placed(x, scene) for x in c.lights)
     if any(isinstance(x, EnvironmentLight) and x.key() in fit_keys for x in lights):
         lights = tuple(x.model_copy(update={"rotation": (x.rotation + TURNED) % 360})
                        if isinstance(x, EnvironmentLight) else x for x in lights)
-        return Condition(c.name, f"{c.label} turned {TURNED:g} degrees",
-                         f"{c.description}, turned about the up axis (the fit saw it as it is)", lights)
-    return Condition(c.name, c.label, c.description, lights)
+        return replace(c, label=f"{c.label} turned {TURNED:g} degrees", lights=lights,
+                       description=f"{c.description}, turned about the up axis (the fit saw it as it is)")
+    return replace(c, lights=lights)
 
 
 HIGHLIGHT_PX = 16.0
@@ -126,7 +173,8 @@ def scenes(scene: ProbeScene, conditions=CONDITIONS, fit_lights=(),
     for c in (_held_out(c, first, fit_keys) for c in conditions):
         # An environment is noisier (every direction lights each pixel): half the resolution at four
         # times the samples, the same cost, half the noise.
-        k = 4 if any(isinstance(x, EnvironmentLight) for x in c.lights) else 1
+        # A disc is sampled as a light of finite size is: the point lights' samples and size.
+        k = 4 if any(isinstance(x, EnvironmentLight) and not is_disc(x) for x in c.lights) else 1
         half = max(1, min(MAX_SPP, k * max(MIN_SPP, scene.spp * SPP_FACTOR)) // 2)
         res = max(16, scene.resolution // 2) if k > 1 else \
             (resolution or scene.resolution) if _frontal(c) else scene.resolution
@@ -137,10 +185,15 @@ def scenes(scene: ProbeScene, conditions=CONDITIONS, fit_lights=(),
     return out
 
 
-def held_out_scenes(scene: ProbeScene, given: bool = False, fit_lights=(), resolution: int | None = None) -> list:
-    """Every condition a result is validated under (the job's own lights first when the fit ran
-    under others), with its two half-sample scenes; ``resolution``: the frontal point lights'."""
-    return scenes(scene, ((given_condition(scene),) if given else ()) + CONDITIONS, fit_lights, resolution)
+def held_out_scenes(scene: ProbeScene, given: bool = False, fit_lights=(), resolution: int | None = None,
+                    sharp: bool = False) -> list:
+    """Every condition a result is validated under, with its two half-sample scenes: the job's own
+    lights first when the fit ran under others (``given``), each point light as its disc where the
+    source is ``sharp`` (its highlight under a point light is smaller than a pixel:
+    `core.job.fitscene.SHARP_PX`); ``resolution``: the frontal point lights'."""
+    conditions = ((given_condition(scene),) if given else ()) + tuple(
+        c.as_disc() if sharp and c.disc else c for c in CONDITIONS)
+    return scenes(scene, conditions, fit_lights, resolution)
 
 
 def _problem(scene: ProbeScene) -> str | None:
@@ -204,29 +257,52 @@ def _check(render_source, render_target, cond: Condition, a: ProbeScene, b: Prob
                  beyond_noise=beyond_noise(err, floor), given=cond.given)
 
 
+def _measured(render_source, render_target, scene: ProbeScene, given_noise: float, resolve_limit: float | None,
+              cond: Condition, a: ProbeScene, b: ProbeScene) -> tuple[Check | None, ProbeScene, ProbeScene]:
+    """One condition's check, rendered again at more samples where that can resolve it (`_more_samples`),
+    and the two scenes it was taken at."""
+    check = _check(render_source, render_target, cond, a, b, scene, given_noise)
+    more = None if check is None else _more_samples(check.noise_floor, resolve_limit, a.spp)
+    if more is not None:
+        a, b = a.with_(spp=more), b.with_(spp=more)
+        check = _check(render_source, render_target, cond, a, b, scene, given_noise)
+    return check, a, b
+
+
 def validate(render_source, render_target, scene: ProbeScene, problems, given: bool = False,
              given_noise: float = 0.0, fit_lights=(), resolution: int | None = None,
-             resolve_limit: float | None = None) -> Validation:
+             resolve_limit: float | None = None, sharp: bool = False) -> Validation:
     """Render both sides under every condition (``render_*(scene) -> image``); ``problems(scene)``
     says why a side cannot render a condition (a light type it lacks), which is then skipped.
     ``given``: the fit ran under other lights than ``scene``'s, whose own are checked first;
     ``given_noise``: two source renders' difference there at ``scene.spp``, measured before the fit;
     ``fit_lights``: the lights the fit ran under (the studio among them is turned for its check);
     ``resolution``: the frontal point lights' (`point_resolution`); ``resolve_limit``: a condition
-    noisier than this is rendered again at more samples where that can resolve it (`_more_samples`)."""
+    noisier than this is rendered again at more samples where that can resolve it (`_more_samples`),
+    and a point light that even they cannot resolve gives way to its disc; ``sharp``: every point
+    light is its disc from the start (`held_out_scenes`)."""
     result = Validation()
-    for cond, a, b in held_out_scenes(scene, given, fit_lights, resolution):
+    measure = functools.partial(_measured, render_source, render_target, scene, given_noise, resolve_limit)
+    for cond, a, b in held_out_scenes(scene, given, fit_lights, resolution, sharp):
         why = problems(a) or _problem(a)
         if why:
             result.skipped[cond.name] = why
             continue
-        check = _check(render_source, render_target, cond, a, b, scene, given_noise)
-        more = None if check is None else _more_samples(check.noise_floor, resolve_limit, a.spp)
-        if more is not None:
-            check = _check(render_source, render_target, cond, a.with_(spp=more), b.with_(spp=more), scene,
-                           given_noise)
+        check, a, b = measure(cond, a, b)
+        if cond.disc and resolve_limit is not None and (check is None or check.noise_floor > resolve_limit):
+            # A highlight smaller than a pixel, or none (a smooth glass shows a point light nowhere): the light
+            # of finite size in its place resolves it (a smooth material is judged, not left unchecked).
+            seen = "the source renders black" if check is None else f"{check.noise_floor:.0%} noise at {check.spp} spp"
+            disc, da, db = scenes(scene, (cond.as_disc(seen),), fit_lights, resolution)[0]
+            if not (problems(da) or _problem(da)):
+                # At its first samples only: where a disc needs more, the light through a glass (a few paths
+                # find it), more samples cost tens of seconds and leave the front discs unresolved.
+                instead = _check(render_source, render_target, disc, da, db, scene, given_noise)
+                if instead is not None and instead.noise_floor <= resolve_limit:
+                    check, a, b = instead, da, db  # else the point light's outcome stands (unresolved, or black)
         if check is None:
             result.skipped[cond.name] = BLACK
         else:
             result.checks.append(check)
+            result.scenes[cond.name] = (a, b)
     return result
