@@ -290,6 +290,9 @@ class CyclesAdapter(Adapter):
     def model_for(self, appearance: Appearance) -> ModelChoice:
         return ModelChoice(*_appearance.model_for(appearance))
 
+    def alternatives(self, appearance: Appearance) -> list[ModelChoice]:
+        return [ModelChoice(*x) for x in _appearance.alternatives(appearance)]
+
     def render_textured(self, model: str, params: dict[str, Value], maps: dict[str, TextureMap],
                         scene: ProbeScene) -> np.ndarray:
         """The probe mesh (its UV map) with an Image Texture node per map: the values written as

@@ -130,3 +130,18 @@ def model_for(a: Appearance) -> tuple[str, dict[str, Value], str]:
     if a.alpha is None or max(a.specular) == 0.0:
         return "diffuse", {}, "diffuse only: the Diffuse BSDF"
     return "principled", {}, "a dielectric with a diffuse base: the Principled BSDF"
+
+
+def alternatives(a: Appearance) -> list[tuple[str, dict[str, Value], str]]:
+    """Cycles' other models for what `model_for` chose: for a metal read as a reflectance (no complex
+    IOR: Schlick's Fresnel, a glTF's or a MaterialX metal's) the Principled BSDF, whose metal is that
+    Fresnel with an F82 edge tint; for a diffuse material the Principled BSDF (Oren-Nayar roughness, a
+    faint specular). A metal of known complex IOR has its own Fresnel in the Metallic BSDF: nothing
+    else follows it closer."""
+    first, _, _ = model_for(a)
+    if first == "metallic" and a.eta is None:
+        return [("principled", {}, "the Principled BSDF's metal: Schlick's Fresnel with an F82 edge tint")]
+    if first == "diffuse":
+        return [("principled", {}, "the Principled BSDF: a diffuse base with Oren-Nayar roughness and a faint "
+                                   "specular")]
+    return []

@@ -481,6 +481,9 @@ class MitsubaAdapter(Adapter):
     def model_for(self, appearance: Appearance) -> ModelChoice:
         return ModelChoice(*_appearance.model_for(appearance))
 
+    def alternatives(self, appearance: Appearance) -> list[ModelChoice]:
+        return [ModelChoice(*x) for x in _appearance.alternatives(appearance)]
+
     def notes(self, model: str, params: dict[str, Value]) -> list[str]:
         return energy_notes(model, params)
 

@@ -140,6 +140,12 @@ class Adapter(abc.ABC):
         source has) and why, in words; None: no choice without a model named. Must not render."""
         return None
 
+    def alternatives(self, appearance: Appearance) -> "list[ModelChoice]":
+        """Other models than `model_for`'s choice that may follow a material of this appearance
+        closer, best first, each with why in words: fitted too where the first choice comes back a
+        mismatch or unreliable (`remap convert`), and the best result kept. Must not render."""
+        return []
+
     def notes(self, model: str, params: dict[str, Value]) -> list[str]:
         """What the renderer does to these parameters that the image cannot show the optimiser,
         e.g. a reflectance it trims to conserve energy. A note makes a fitted result unreliable."""

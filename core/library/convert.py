@@ -14,6 +14,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..data.appearance import Appearance
 from ..data.atomic import write_bytes_atomic, write_json_atomic
 from ..data.errors import ConfigError, RemapError
 from ..data.scene import ProbeScene
@@ -27,8 +28,9 @@ from ..run.runner import Done, Runner, Task
 from ..run.store import Store, owned
 from ..tables import Table, TableMap
 from ..tables.lookup import Answer
+from .alternatives import Tried, advise, keep_best, retries
 from .formats import Converted, Entry, Formats
-from .records import ConvertSummary, ItemStatus, MaterialRow
+from .records import ConvertSummary, ItemStatus, MaterialRow, TriedModel
 
 
 @dataclass(frozen=True)
@@ -62,6 +64,10 @@ class Item:
     failure: str = ""
     flattened: bool = False
     """A textured material no table maps: converted with its textures' constants (said on its line)."""
+    look: Appearance | None = None
+    """The source read in neutral terms, where the adapter chose the model from it (`model_for`)."""
+    tried: list[Tried] = field(default_factory=list)
+    """Every model fitted for it, the kept one among them, where more than one was (`core.library.alternatives`)."""
 
     @property
     def status(self) -> ItemStatus:
@@ -199,23 +205,38 @@ def _prepare(item: Item, dest: Destination, registry: AdapterRegistry, adapters:
              settings: Settings) -> None:
     e, src = item.entry, item.entry.material
     fix: dict = {}
-    if dest.model is not None:
-        item.model = dest.model
-    elif src.adapter == dest.adapter:
-        item.model, item.why = src.model, "its own model (the source is already this adapter's)"
-    else:
-        look = adapters[src.adapter].appearance(src.model, registry.get(src.adapter).models[src.model].complete(
-            src.params, file=e.file, prefix=f"{e.name}: params"))
-        choice = adapters[dest.adapter].model_for(look) if look is not None else None
+    item.model = dest.model or ""
+    if src.adapter == dest.adapter:
+        if dest.model is None:
+            item.model, item.why = src.model, "its own model (the source is already this adapter's)"
+        _task(item, dest, fix, registry, scene, settings)
+        return
+    item.look = adapters[src.adapter].appearance(src.model, registry.get(src.adapter).models[src.model].complete(
+        src.params, file=e.file, prefix=f"{e.name}: params"))
+    if dest.model is None:
+        choice = adapters[dest.adapter].model_for(item.look) if item.look is not None else None
         if choice is None:
             raise ConfigError(f"adapter {dest.adapter!r} cannot choose a model for it: give --to "
                               f"{dest.adapter}:MODEL (models: {', '.join(sorted(registry.get(dest.adapter).models))})")
         item.model, fix, item.why = choice.model, dict(choice.fix), choice.why
-    job = Job(source=src, target=Target(adapter=dest.adapter, model=item.model, fix=fix), scene=scene,
+    _task(item, dest, fix, registry, scene, settings)
+
+
+def _task(item: Item, dest: Destination, fix: dict, registry: AdapterRegistry, scene: ProbeScene,
+          settings: Settings) -> None:
+    e = item.entry
+    title = f"{e.name} (its textures as constants: no table maps it)" if item.flattened else e.name
+    item.task = model_task(item, item.slot, dest.adapter, item.model, fix, title, registry, scene, settings)
+
+
+def model_task(item: Item, slot: str, adapter: str, model: str, fix: dict, title: str, registry: AdapterRegistry,
+               scene: ProbeScene, settings: Settings) -> Task:
+    """The job of fitting this material to one model of the target, in ``slot``."""
+    e = item.entry
+    job = Job(source=e.material, target=Target(adapter=adapter, model=model, fix=fix), scene=scene,
               settings=settings, label=f"{e.file}: {e.name}")
     where = Where(source_file=e.file, params_prefix=f"{e.name}: params", target_file=None, target_prefix="--to ")
-    title = f"{e.name} (its textures as constants: no table maps it)" if item.flattened else e.name
-    item.task = Task(item.slot, resolve(job, registry, where).job, title)
+    return Task(slot, resolve(job, registry, where).job, title)
 
 
 def convert(entries: list[Entry], dest: Destination, out: str | Path, registry: AdapterRegistry, formats: Formats,
@@ -231,6 +252,17 @@ def convert(entries: list[Entry], dest: Destination, out: str | Path, registry: 
                         quiet=quiet, stop_on_error=False, line=_line)
         for item, done in zip(runnable, runner.run([i.task for i in runnable])):
             item.done = done
+        second = [] if dest.model is not None else retries(
+            runnable, adapters[dest.adapter],
+            lambda item, slot, choice, title: model_task(item, slot, dest.adapter, choice.model, dict(choice.fix),
+                                                         title, registry, scene, settings))
+        if second:
+            for (item, choice, _), done in zip(second, runner.run([t for _, _, t in second])):
+                item.tried.append(Tried.of(choice, done))
+            for item in {id(i): i for i, _, _ in second}.values():
+                keep_best(item)
+        for item in runnable:
+            advise(item, registry.get(dest.adapter).models[item.model], adapters[dest.adapter])
         result = Conversion(items, dest, where=workers.where)
         _write_libraries(result, folder, formats)
         result.seconds = time.perf_counter() - t0
@@ -327,7 +359,10 @@ def summary(result: Conversion) -> ConvertSummary:
                                 perceptual=rep.metrics.perceptual if rep else None,
                                 renders=rep.renders if rep else None, seconds=rep.seconds if rep else None,
                                 resumed=bool(i.done and i.done.resumed), notes=i.entry.notes,
-                                textured=i.entry.textured))
+                                textured=i.entry.textured, tried=[
+                                    TriedModel(model=t.model, slot=t.done.task.slot, status=t.status,
+                                               relative_rmse=t.done.report.metrics.relative_rmse if t.done.report
+                                               else None, kept=t.done is i.done) for t in i.tried]))
     return ConvertSummary(target=result.destination.adapter, model=result.destination.model, materials=rows,
                           converted=sum(i.done is not None and i.done.report is not None for i in result.items),
                           failed=len(result.failed), libraries=[p.name for p in result.libraries],

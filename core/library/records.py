@@ -30,6 +30,16 @@ class ItemStatus(StrEnum):
         return self not in (ItemStatus.FAILED, ItemStatus.UNSUPPORTED, ItemStatus.PENDING)
 
 
+class TriedModel(Strict):
+    """One model fitted for a material where its first came back a mismatch or unreliable."""
+
+    model: str
+    slot: str = Field(description="Its result's folder under materials/.")
+    status: ItemStatus
+    relative_rmse: float | None
+    kept: bool
+
+
 class MaterialRow(Strict):
     name: str = Field(description="The material's name in its file.")
     file: str
@@ -45,6 +55,8 @@ class MaterialRow(Strict):
     resumed: bool = Field(description="Its result was found from an earlier run.")
     notes: list[str]
     textured: list[str]
+    tried: list[TriedModel] = Field(default_factory=list, description="Every model fitted for it where the first "
+                                                                      "chosen came back a mismatch or unreliable.")
 
 
 class ConvertSummary(Strict):

@@ -102,7 +102,11 @@ def test_materialx_of_each_shader_type_converts_to_mitsuba(tmp_path, mitsuba_ada
     assert main(["convert", str(DATA / "materialx"), "--to", to, "--out", str(out), *ONE_PER_SHADER,
                  *FORMATS_ONLY]) == 0
     s = _summary(out)
-    assert s["converted"] == 4 and {m["model"] for m in s["materials"]} == models
+    # The adapter's first choices, or Mitsuba's principled BSDF where a first choice came back a mismatch
+    # or unreliable and the principled BSDF was kept over it (said on the material's line).
+    first = {m["tried"][0]["model"] if m["tried"] else m["model"] for m in s["materials"]}
+    assert s["converted"] == 4 and first == models
+    assert all(m["model"] in models or "kept over" in m["model_why"] for m in s["materials"])
     assert {Path(m["file"]).name for m in s["materials"]} == {"open_pbr.mtlx", "standard_surface.mtlx",
                                                             "gltf_pbr.mtlx", "usd_preview.mtlx"}
     mitsuba_adapter.mi.load_file(str(out / "library.xml"))
@@ -196,3 +200,24 @@ def test_one_material_in_two_files_is_fitted_once_and_kept_under_each_name(tmp_p
         str(tmp_path / "a.xml"), str(tmp_path / "b.xml")]
     assert reports["a/grey"]["seconds"] == reports["b/grey"]["seconds"]  # one fit, kept twice
     assert main(args) == 0 and all(m["resumed"] for m in _summary(out)["materials"])
+
+
+def test_a_mismatch_is_fitted_again_to_the_targets_other_model_and_the_better_kept(tmp_path, mitsuba_adapter,
+                                                                                    cycles_adapter):
+    """Issue 43: MaterialX's glTF default (a white metal read as a reflectance) goes to Mitsuba's rough
+    conductor first, a mismatch (about 42 %: a complex IOR's Fresnel is not Schlick's); Mitsuba's
+    principled BSDF, tried next, follows it closer and is kept, the choice said on its line."""
+    mtlx = ROOT.parent / "shared" / "corpus" / "materialx" / "GltfPbr" / "gltf_pbr_default.mtlx"
+    if not mtlx.exists():
+        pytest.skip(f"the public corpus is not beside the checkout ({mtlx})")
+    out = tmp_path / "out"
+    assert main(["convert", str(mtlx), "--to", "mitsuba", "--out", str(out), "--quiet", "--resolution", "32",
+                 "--spp", "8"]) == 0
+    (row,) = json.loads((out / "convert.json").read_text())["materials"]
+    tried = {t["model"]: t for t in row["tried"]}
+    assert set(tried) == {"roughconductor", "principled"}, row
+    kept = next(t for t in row["tried"] if t["kept"])
+    assert kept["relative_rmse"] == min(t["relative_rmse"] for t in row["tried"]) and row["model"] == kept["model"]
+    assert row["slot"] == kept["slot"] and (out / "materials" / kept["slot"] / "result.json").exists()
+    assert ("kept over" if kept["model"] == "principled" else "none closer") in row["model_why"]
+    assert f'id="{row["name"]}"' in (out / "library.xml").read_text() or row["name"] in (out / "library.xml").read_text()
