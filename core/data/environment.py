@@ -152,7 +152,8 @@ def check_file(path: Path) -> str | None:
     from .imageio import captured_stderr
 
     if not path.is_file():
-        return "file not found (give the path of an equirectangular EXR or HDR, or 'studio' or 'constant')"
+        return ("file not found (give the path of an equirectangular EXR or HDR, or a built-in map: "
+                f"{', '.join(_BUILTINS)})")
     with captured_stderr() as err:
         inp = oiio.ImageInput.open(str(path))
         spec = None if inp is None else inp.spec()

@@ -98,7 +98,9 @@ class EnvironmentLight(_Strict):
 
     type: Literal["environment"]
     map: str = Field("studio", description="'studio' (built in: key, fill and rim lights), 'constant' (radiance 1 "
-                                           "everywhere), or the path of an equirectangular EXR or HDR of linear "
+                                           "everywhere), a built-in disc of light ('probe-disc', 'grazing-disc', "
+                                           "'rim-disc', 'headlight-disc', 'back-disc': scale is its irradiance), "
+                                           "or the path of an equirectangular EXR or HDR of linear "
                                            "radiance, twice as wide as high (relative to the scene file).")
     scale: float = Field(1.0, gt=0, le=1e6, description="Multiplies the map's radiance.")
     rotation: float = Field(0.0, ge=-360, le=360, description="Turns the map about the up axis (+y), degrees: a "

@@ -38,6 +38,10 @@ SHARP_PX = 8.0
 """A source whose highlight under the scene's point light carries half its light in fewer pixels than this
 is sharp (a GGX metal below about alpha 0.03: alpha 0.01 in 2 pixels, 0.05 in 18): fitted and judged with
 its point lights as discs (`_discs`), which show such a highlight as the disc's image."""
+SHARP_NOISE = 0.01
+"""A sharp highlight is noisy: its source's two renders differ by more than this at the scene's samples
+(Au GGX alpha 0.03: 1.3 % at 16 spp, 0.05: 0.7 %, a diffuse sphere 0.4 %), so the highlight's size is
+measured (one render of the specular lobe) only above it."""
 ENV_MIN_RESOLUTION = 32
 """A perfectly smooth (or near-mirror, opaque) source's studio fit scene is half the job's resolution, at least this: a
 quarter of the cost. The samples it takes to resolve it (up to 16 times the scene's) made these
@@ -151,7 +155,7 @@ def choose_lights(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene,
         return FitScene(scene)
     noise = source_noise(render, scene)
     if policy == Policy.AUTO and environment_ok and not transmissive and not scene.views and \
-            scene.environment is None and (smooth or (math.isfinite(noise) and highlight is not None and
+            scene.environment is None and (smooth or (SHARP_NOISE < noise < math.inf and highlight is not None and
                                                        highlight(scene) < SHARP_PX)):
         why = "a perfectly smooth material (it shows a point light as a point at most)" if smooth else \
             f"a highlight smaller than {SHARP_PX:g} pixels under the scene's point light ({noise:.1%} noise " \
