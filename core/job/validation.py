@@ -294,9 +294,10 @@ def validate(render_source, render_target, scene: ProbeScene, problems, given: b
             # of finite size in its place resolves it (a smooth material is judged, not left unchecked).
             seen = "the source renders black" if check is None else f"{check.noise_floor:.0%} noise at {check.spp} spp"
             disc, da, db = scenes(scene, (cond.as_disc(seen),), fit_lights, resolution)[0]
-            if not (problems(da) or _problem(da)):
-                # At its first samples only: where a disc needs more, the light through a glass (a few paths
-                # find it), more samples cost tens of seconds and leave the front discs unresolved.
+            # At its first samples only: where a disc needs more, the light through a glass (a few paths
+            # find it), more samples cost tens of seconds and leave the front discs unresolved. The source
+            # first (cached for the check): where it alone is over the limit, the target is not rendered.
+            if not (problems(da) or _problem(da)) and _mean_and_noise(render_source, da, db)[1] <= resolve_limit:
                 instead = _check(render_source, render_target, disc, da, db, scene, given_noise)
                 if instead is not None and instead.noise_floor <= resolve_limit:
                     check, a, b = instead, da, db  # else the point light's outcome stands (unresolved, or black)

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 from ..data.appearance import Appearance
 from ..data.errors import RemapError
-from ..data.schemas import ModelSpec
+from ..data.schemas import ModelSpec, Need
 from ..host.protocol import ModelChoice
 from ..run.runner import Done, Task
 from .records import ItemStatus
@@ -79,7 +79,8 @@ def lacks(look: Appearance, spec: ModelSpec) -> list[str]:
     choices = next((p.choices for p in spec.parameters if p.name == "distribution"), ())
     if look.distribution is not None and choices and look.distribution not in choices:
         out.append(f"its {look.distribution} lobe ({spec.name} has {', '.join(choices)} only)")
-    served = {need for p in spec.parameters for need in p.fit_for}
+    served = {need for p in spec.parameters for need in p.fit_for} | (
+        {Need.EDGE_TINT} if spec.complex_ior is not None else set())  # a complex IOR has its own edge
     out += [f"{why} (no input of {spec.name} renders it)" for need, why in look.needs().items() if need not in served]
     return out
 

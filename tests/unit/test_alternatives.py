@@ -69,6 +69,9 @@ def test_what_the_chosen_model_lacks_is_read_from_its_declared_parameters():
     models = collect_adapters().get("cycles").models
     assert lacks(PLASTIC, models["principled"]) == ["its beckmann lobe (principled has multi_ggx, ggx only)"]
     assert lacks(PLASTIC, models["glossy"]) == []  # Beckmann among its choices
+    aluminium = SCHLICK_METAL.model_copy(update={"eta": (1.66, 0.88, 0.52), "k": (9.22, 6.27, 4.84)})
+    assert lacks(aluminium, models["metallic"]) == []  # its complex IOR renders the edge itself
+    assert lacks(aluminium, models["glossy"]) and "Schlick" in lacks(aluminium, models["glossy"])[0]
 
 
 def test_what_a_model_drops_of_the_reading_is_read_back_through_the_adapter(mitsuba_adapter):
