@@ -198,16 +198,13 @@ def model_for(a: Appearance) -> tuple[str, dict[str, Value], str]:
 
 
 def alternatives(a: Appearance) -> list[tuple[str, dict[str, Value], str]]:
-    """Mitsuba's other models for what `model_for` sends to a rough plastic or a rough conductor:
-    its principled BSDF, whose Schlick Fresnel, GGX lobe and plain diffuse base are a Principled
-    material's own (a rough plastic's diffuse is seen through its coat, darker and more saturated;
-    a conductor's Fresnel is a complex IOR's); and the other microfacet distribution where the
-    source names none."""
-    first, fix, _ = model_for(a)
-    out = []
+    """Mitsuba's other model for what `model_for` sends to a rough plastic or a rough conductor: its
+    principled BSDF, whose Schlick Fresnel, GGX lobe and plain diffuse base are a Principled material's
+    own (a rough plastic's diffuse is seen through its coat, darker and more saturated; a conductor's
+    Fresnel is a complex IOR's). The other distribution is not offered: where the source names none,
+    the first fit's informed start already tries both."""
+    first, _, _ = model_for(a)
     if first in ("roughplastic", "roughconductor") and a.transmission == 0.0:
-        out.append(("principled", {}, "Mitsuba's principled BSDF: Schlick's Fresnel and a diffuse base under no coat, "
-                                      "as a Principled material has"))
-    if first in ("roughplastic", "roughconductor") and "distribution" not in fix:
-        out.append((first, {**fix, "distribution": "beckmann"}, "the Beckmann distribution (the first fit was GGX)"))
-    return out
+        return [("principled", {}, "Mitsuba's principled BSDF: Schlick's Fresnel and a diffuse base under no coat, "
+                                   "as a Principled material has")]
+    return []

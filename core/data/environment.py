@@ -82,8 +82,8 @@ def constant(width: int = 64) -> np.ndarray:
 
 DISC_RADIUS = 12.0
 """A disc light's angular radius, degrees: a soft box's, about. A mirror sphere shows it as a highlight
-about 4 pixels across at the probe's 128 px (resolved by tens of samples), where a point light's is a
-fraction of one; its edge is a 2-degree ramp (a quarter of the map's pixel pitch in it)."""
+about 18 pixels across at the probe's 128 px (resolved by tens of samples), where a point light's is a
+fraction of one; its edge is a 2-degree linear ramp (about 3 pixels of the 512-wide map)."""
 DISC_EDGE = 2.0
 
 
@@ -102,9 +102,9 @@ class Disc:
 
 
 DISCS = {"probe-disc": Disc(45.0, 125.0), "grazing-disc": Disc(80.0, 125.0), "rim-disc": Disc(120.0, 125.0),
-         "headlight-disc": Disc(0.0, 125.0), "back-disc": Disc(100.0, 305.0)}
-"""The built-in discs: where the probe's light, the held-out grazing, rim and head lights, and the fit's
-back light are (`core.job.validation`, `core.job.fitscene`)."""
+         "headlight-disc": Disc(0.0, 125.0)}
+"""The built-in discs: where the probe's light and the held-out grazing, rim and head lights are
+(`core.job.validation`, `core.job.fitscene`)."""
 
 
 def disc(where: Disc, width: int = 512) -> np.ndarray:

@@ -33,9 +33,11 @@ class RenderError(RemapError):
 
 class RenderTimeoutError(RenderError):
     """A render that did not finish within its time limit, ``seconds``, and was stopped: a fact
-    `remap check` diagnoses (a renderer that does not honour its sample count renders until halted)."""
+    `remap check` diagnoses (a renderer that does not honour its sample count renders until halted).
+    ``seconds`` has a default so that it unpickles (pickle rebuilds it from its message; its attributes
+    come back after), as it crosses a process pool."""
 
-    def __init__(self, message: str, *, seconds: float, where: str | None = None):
+    def __init__(self, message: str, *, seconds: float = 0.0, where: str | None = None):
         self.seconds = seconds
         super().__init__(message, where=where)
 

@@ -99,7 +99,7 @@ class EnvironmentLight(_Strict):
     type: Literal["environment"]
     map: str = Field("studio", description="'studio' (built in: key, fill and rim lights), 'constant' (radiance 1 "
                                            "everywhere), a built-in disc of light ('probe-disc', 'grazing-disc', "
-                                           "'rim-disc', 'headlight-disc', 'back-disc': scale is its irradiance), "
+                                           "'rim-disc', 'headlight-disc': scale is its irradiance), "
                                            "or the path of an equirectangular EXR or HDR of linear "
                                            "radiance, twice as wide as high (relative to the scene file).")
     scale: float = Field(1.0, gt=0, le=1e6, description="Multiplies the map's radiance.")

@@ -38,6 +38,7 @@ SHARP_PX = 8.0
 """A source whose highlight under the scene's point light carries half its light in fewer pixels than this
 is sharp (a GGX metal below about alpha 0.03: alpha 0.01 in 2 pixels, 0.05 in 18): fitted and judged with
 its point lights as discs (`_discs`), which show such a highlight as the disc's image."""
+SMOOTH_WHY = "a perfectly smooth material (it shows a point light as a point at most)"
 SHARP_NOISE = 0.01
 """A sharp highlight is noisy: its source's two renders differ by more than this at the scene's samples
 (Au GGX alpha 0.03: 1.3 % at 16 spp, 0.05: 0.7 %, a diffuse sphere 0.4 %), so the highlight's size is
@@ -157,7 +158,7 @@ def choose_lights(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene,
     if policy == Policy.AUTO and environment_ok and not transmissive and not scene.views and \
             scene.environment is None and (smooth or (SHARP_NOISE < noise < math.inf and highlight is not None and
                                                        highlight(scene) < SHARP_PX)):
-        why = "a perfectly smooth material (it shows a point light as a point at most)" if smooth else \
+        why = SMOOTH_WHY if smooth else \
             f"a highlight smaller than {SHARP_PX:g} pixels under the scene's point light ({noise:.1%} noise " \
             f"at {scene.spp} spp)"
         found = _discs(render, scene, noise, limit, why)
@@ -166,7 +167,7 @@ def choose_lights(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene,
     if (smooth or noise == math.inf or (transmissive and noise > GOAL)) and policy == Policy.AUTO and environment_ok \
             and scene.environment is None and not scene.views:
         # Taken however noisy: under the point lights there is nothing (or less) to fit (the verdict says how noisy).
-        why = "a perfectly smooth material (it shows a point light as a point at most)" if smooth else \
+        why = SMOOTH_WHY if smooth else \
             "the source renders black under the scene's lights" if noise == math.inf else \
             f"light through the sphere, which a point light reaches by rare paths ({noise:.0%} noise at " \
             f"{scene.spp} spp)"

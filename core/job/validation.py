@@ -283,8 +283,12 @@ def validate(render_source, render_target, scene: ProbeScene, problems, given: b
     light is its disc from the start (`held_out_scenes`)."""
     result = Validation()
     measure = functools.partial(_measured, render_source, render_target, scene, given_noise, resolve_limit)
+
+    def blocked(sc: ProbeScene) -> str | None:
+        return problems(sc) or _problem(sc)
+
     for cond, a, b in held_out_scenes(scene, given, fit_lights, resolution, sharp):
-        why = problems(a) or _problem(a)
+        why = blocked(a)
         if why:
             result.skipped[cond.name] = why
             continue
@@ -297,7 +301,7 @@ def validate(render_source, render_target, scene: ProbeScene, problems, given: b
             # At its first samples only: where a disc needs more, the light through a glass (a few paths
             # find it), more samples cost tens of seconds and leave the front discs unresolved. The source
             # first (cached for the check): where it alone is over the limit, the target is not rendered.
-            if not (problems(da) or _problem(da)) and _mean_and_noise(render_source, da, db)[1] <= resolve_limit:
+            if not blocked(da) and _mean_and_noise(render_source, da, db)[1] <= resolve_limit:
                 instead = _check(render_source, render_target, disc, da, db, scene, given_noise)
                 if instead is not None and instead.noise_floor <= resolve_limit:
                     check, a, b = instead, da, db  # else the point light's outcome stands (unresolved, or black)

@@ -67,7 +67,10 @@ def retries(items: list[Item], adapter, make_task) -> list[tuple[Item, ModelChoi
             continue
         for choice in adapter.alternatives(item.look):
             title = f"{item.entry.name} (also {_tag(choice)}: {item.model} came back {item.status})"
-            out.append((item, choice, make_task(item, f"{item.slot}~{_tag(choice)}", choice, title)))
+            try:
+                out.append((item, choice, make_task(item, f"{item.slot}~{_tag(choice)}", choice, title)))
+            except RemapError as exc:  # an alternative the job cannot take: said, and the others go on
+                item.why = f"{item.why}; {_tag(choice)} not tried: {exc}"
     return out
 
 
