@@ -13,6 +13,7 @@ from pydantic import Field, computed_field
 
 from .model import Strict, WithDerived
 from .scene import Lighting
+from .settings import Scheme
 
 class Severity(StrEnum):
     UNRELIABLE = "unreliable"
@@ -65,7 +66,7 @@ class ErrorAboveThreshold(_Finding):
 
 
 class HeldOutError(Strict):
-    condition: str
+    condition: Lighting
     label: str
     error: float
     beyond_noise: float = Field(description="The error beyond the render noise and, where they differ, the "
@@ -107,7 +108,7 @@ class RenderersFloor(_Note):
     result's error there is within that difference: the renderers', not the material's."""
 
     kind: Literal["renderers_floor"] = "renderers_floor"
-    condition: str
+    condition: Lighting
     label: str
     error: float = Field(description="The two renderers' reference materials' relative RMSE there.")
     beyond_noise: float
@@ -127,7 +128,7 @@ class RenderersDisagree(_Finding):
     theirs, not the model's (`core.job.agreement`)."""
 
     kind: Literal["renderers_disagree"] = "renderers_disagree"
-    condition: str
+    condition: Lighting
     label: str
     reference: str = Field(description="What was compared: each adapter's clear glass of IOR 1.5, smooth or rough.")
     error: float = Field(description="The two references' relative RMSE (8 x 8 pixel blocks).")
@@ -163,7 +164,7 @@ class CannotResolve(_Finding):
     """The renders are too noisy to tell a match from a mismatch: no error here means anything."""
 
     kind: Literal["cannot_resolve"] = "cannot_resolve"
-    condition: str = Field(description="'scene' (the fit's own scene) or a held-out condition.")
+    condition: Lighting = Field(description="'scene' (the fit's own scene) or a held-out condition.")
     label: str = Field(description="The condition in words.")
     noise_floor: float
     limit: float
@@ -279,7 +280,7 @@ class ImagePrecision(_Finding):
 
 class ValidationSkipped(_Note):
     kind: Literal["validation_skipped"] = "validation_skipped"
-    condition: str
+    condition: Lighting
     why: str
 
     def sentence(self) -> str:
@@ -313,7 +314,7 @@ class TableLookup(_Note):
 
 
 class TexturedCondition(Strict):
-    condition: str
+    condition: Lighting
     error: float
     beyond_noise: float
 
@@ -385,7 +386,7 @@ class SmoothHeld(_Note):
 
 class SchemeChosen(_Note):
     kind: Literal["scheme_chosen"] = "scheme_chosen"
-    scheme: str
+    scheme: Scheme
     why: str
     fallback: bool = Field(False, description="The scheme asked for could not run; this one ran instead.")
 

@@ -10,7 +10,9 @@ from pydantic import Field
 
 from ..data.findings import Verdict
 from ..data.model import Strict
+from ..data.scene import Lighting
 from ..data.schemas import Value
+from ..data.settings import Scheme
 
 StageStatus = Literal["converged", "below_noise", "polished", "budget", "stopped"]
 CONVERGED: frozenset[str] = frozenset({"converged", "below_noise", "polished"})
@@ -47,7 +49,7 @@ class Check(Strict):
     """The source and the fitted target rendered under one held-out condition, at samples and
     seeds the fit never saw (each side twice, half the samples each: their difference is the noise)."""
 
-    condition: str = Field(description="grazing, rim, headlight, environment.")
+    condition: Lighting = Field(description="grazing, rim, headlight, environment.")
     label: str = Field(description="The condition in a few words (grazing light, studio environment).")
     description: str
     spp: int = Field(description="Samples per pixel of each side's image (two renders of half as many).")
@@ -68,7 +70,7 @@ class Disagreement(Strict):
     """Two renderers drawing one kind of material otherwise under one condition: their reference
     materials (clear glasses) differ there beyond the noise, by more than the threshold."""
 
-    condition: str = Field(description="'scene' (the fit's) or a held-out condition.")
+    condition: Lighting = Field(description="'scene' (the fit's) or a held-out condition.")
     label: str
     kind: str = Field(description="The reference compared (smooth glass, rough glass, white Lambertian).")
     error: float
@@ -108,8 +110,8 @@ class EngineResult:
 
     params: dict[str, Value]
     fitted: list[str]
-    scheme: str
-    scheme_used: str
+    scheme: Scheme
+    scheme_used: Scheme
     relative_rmse: float
     perceptual: float
     threshold: float

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..data.schemas import ModelSpec, ParamKind, Scale, Value
 from ..job.report import Report
-from .spec import Experiment, PlotChannels, Point, label
+from .spec import Experiment, PlotChannels, Point, Side, SideParam, label
 from ..data.findings import Status
 
 
@@ -128,11 +128,11 @@ def find_cliffs(x: list[float], y: list[float], k: float, window: int, min_step:
     return out
 
 
-def quantity(row: Row, name: str) -> Value | None:
-    side, key = name.split(".", 1)
-    if side == "source":
+def quantity(row: Row, q: SideParam) -> Value | None:
+    key = q.name
+    if q.side is Side.SOURCE:
         return row.source.get(key)
-    leg = row.forward if side == "target" else row.back
+    leg = row.forward if q.side is Side.TARGET else row.back
     if leg is None:
         return None
     # Derived first: it is computed from the active parameters (an inactive default may share its name).
@@ -214,7 +214,7 @@ def _cliffs_of(exp: Experiment, rows: list[Row], idx: list[int], series: Series)
 
 def roundtrip_fit(exp: Experiment, rows: list[Row]) -> dict[str, float]:
     """Least-squares line through (original, recovered) of the unflagged points; slope, intercept, R²."""
-    name = exp.compare or exp.plot.x.split(".", 1)[1]
+    name = exp.compared()
     xs, ys = [], []
     for r in rows:
         if r.flagged or r.back is None:

@@ -11,7 +11,7 @@ import numpy as np
 from ..data.atomic import temp_beside, why
 from ..data.errors import ConfigError
 from .analysis import channels, quantity
-from .spec import PlotChannels, label
+from .spec import PlotChannels, Side, SideParam, label
 
 if TYPE_CHECKING:
     from .analysis import Row
@@ -46,11 +46,11 @@ def _save(fig, base: Path, svg: bool = True) -> Path:
     return png
 
 
-def _name(q: str) -> str:
-    return q.split(".", 1)[1].replace("_", " ")
+def _name(q: SideParam) -> str:
+    return q.name.replace("_", " ")
 
 
-def _points(exp: "Experiment", rows: list["Row"], xq: str, yq: str):
+def _points(exp: "Experiment", rows: list["Row"], xq: SideParam, yq: SideParam):
     out = []  # (group label, x, y, flagged, cliff, channel, mismatch)
     for r in rows:
         xs = channels(quantity(r, xq), exp.plot.channels)
@@ -111,9 +111,9 @@ def sweep_plot(base: Path, exp: "Experiment", rows: list["Row"]) -> Path:
 def roundtrip_plot(base: Path, exp: "Experiment", rows: list["Row"], fit: dict[str, float] | None) -> Path:
     """Recovered against original with the unit line and the fitted line of the unflagged points."""
     plt = _plt()
-    name = exp.compare or exp.plot.x.split(".", 1)[1]
+    name = exp.compared()
     fig, ax = plt.subplots(figsize=(4.8, 4.5))
-    pts = _points(exp, rows, f"source.{name}", f"back.{name}")
+    pts = _points(exp, rows, SideParam(Side.SOURCE, name), SideParam(Side.BACK, name))
     good = [p for p in pts if not p[3]]
     bad = [p for p in pts if p[3]]
     if pts:

@@ -22,7 +22,7 @@ from ..run.runner import Done, Runner, Task
 from ..run.store import Store, owned
 from .analysis import Leg, Row, detect_cliffs, roundtrip_fit
 from .plots import cliff_figure, roundtrip_plot, sweep_plot
-from .spec import Experiment, ExperimentKind, Point, label, points_of
+from .spec import Experiment, ExperimentKind, Point, Side, label, points_of
 from .table import ExperimentResult, summary, write_csv
 
 
@@ -64,19 +64,17 @@ def validate(exp: Experiment, file: str, registry: AdapterRegistry) -> None:
             raise ConfigError(f"model {spec.name!r} has no parameter {name!r} (known: {', '.join(spec.names)})",
                               file=file, field=where)
     target = model_of(registry, exp.target.adapter, exp.target.model, file, "target.")
-    sides = {"source": spec, "target": target}
+    sides = {Side.SOURCE: spec, Side.TARGET: target}
     if exp.kind is ExperimentKind.ROUNDTRIP:
         back = exp.back_side()
-        sides["back"] = model_of(registry, back.adapter, back.model, file, "back.")
-    for where, text in (("plot.x", exp.plot.x), ("plot.y", exp.plot.y)):
-        side, name = text.split(".", 1)
-        if side not in sides:
-            raise ConfigError(f"{side}.<name> belongs to a round trip", file=file, field=where)
-        _known(sides[side], name, file, where)
+        sides[Side.BACK] = model_of(registry, back.adapter, back.model, file, "back.")
+    for where, q in (("plot.x", exp.plot.x), ("plot.y", exp.plot.y)):
+        if q.side not in sides:
+            raise ConfigError(f"{q.side}.<name> belongs to a round trip", file=file, field=where)
+        _known(sides[q.side], q.name, file, where)
     if exp.kind is ExperimentKind.ROUNDTRIP:
-        compare = exp.compare or exp.plot.x.split(".", 1)[1]
-        for side in ("source", "back"):
-            _known(sides[side], compare, file, "compare")
+        for side in (Side.SOURCE, Side.BACK):
+            _known(sides[side], exp.compared(), file, "compare")
     for name in exp.cliff.params or ():
         if name not in target.names:
             raise ConfigError(f"model {target.name!r} has no parameter {name!r} (known: {', '.join(target.names)})",

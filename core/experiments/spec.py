@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 from pydantic import Field, model_validator
+from pydantic_core import core_schema
 
 from ..data.configio import load_yaml_model
 from ..data.model import Strict as _Strict
@@ -76,9 +77,46 @@ class PlotChannels(StrEnum):
     EACH = "each"
 
 
+class Side(StrEnum):
+    """Whose quantity an experiment reads: the source's, the forward result's or the way back's."""
+
+    SOURCE = "source"
+    TARGET = "target"
+    BACK = "back"
+
+
+@dataclass(frozen=True)
+class SideParam:
+    """A quantity of one side, written "side.name" ("source.alpha", "target.roughness", "back.x"):
+    parsed here alone; a model holding one reads and writes that string."""
+
+    side: Side
+    name: str
+
+    @classmethod
+    def parse(cls, text: str, field: str = "") -> SideParam:
+        """``text`` as a SideParam; ``field`` (e.g. "plot.x") names it in the error."""
+        side, dot, name = text.partition(".")
+        if not dot or not name or side not in {s.value for s in Side}:
+            raise ValueError(f"{field + ': ' if field else ''}must look like source.<name>, target.<name> or "
+                             f"back.<name>, not {text!r}")
+        return cls(Side(side), name)
+
+    def __str__(self) -> str:
+        return f"{self.side}.{self.name}"
+
+    @classmethod
+    def __get_pydantic_core_schema__(cls, source: Any, handler: Any) -> core_schema.CoreSchema:
+        text = core_schema.no_info_after_validator_function(cls.parse, core_schema.str_schema())
+        return core_schema.json_or_python_schema(  # one given as such is read from its string
+            json_schema=text, python_schema=core_schema.no_info_before_validator_function(
+                lambda v: str(v) if isinstance(v, cls) else v, text),
+            serialization=core_schema.to_string_ser_schema(when_used="always"))  # a dump to Python too
+
+
 class PlotSpec(_Strict):
-    x: str = Field(description="source.<name>: a source parameter or derived quantity.")
-    y: str = Field(description="target.<name> (or back.<name> in a round trip).")
+    x: SideParam = Field(description="source.<name>: a source parameter or derived quantity.")
+    y: SideParam = Field(description="target.<name> (or back.<name> in a round trip).")
     channels: PlotChannels = Field(PlotChannels.MEAN, description="RGB values: their mean, or one point per channel.")
     xlabel: str | None = None
     ylabel: str | None = None
@@ -126,15 +164,16 @@ class Experiment(_Strict):
 
     @model_validator(mode="after")
     def _check(self) -> "Experiment":
-        for name, v in (("plot.x", self.plot.x), ("plot.y", self.plot.y)):
-            if v.split(".", 1)[0] not in ("source", "target", "back") or "." not in v:
-                raise ValueError(f"{name} must look like source.<name>, target.<name> or back.<name>")
         if self.kind is ExperimentKind.SWEEP and (self.back is not None or self.compare is not None):
             raise ValueError("back and compare belong to kind: roundtrip")
         n = len(self.sweep.all_values()) * (len(self.groups.values) if self.groups else 1)
         if n > MAX_POINTS:
             raise ValueError(f"{n} points: at most {MAX_POINTS} in one experiment")
         return self
+
+    def compared(self) -> str:
+        """Round trip: the quantity compared, source against back (the plot's x's name by default)."""
+        return self.compare or self.plot.x.name
 
     def back_side(self) -> Target:
         if self.back is not None:

@@ -56,7 +56,7 @@ def _pair(adapter: Adapter, kind: str, scenes: tuple[ProbeScene, ProbeScene]) ->
                  for sc in scenes)  # type: ignore[return-value]
 
 
-def compare(one: Adapter, other: Adapter, condition: str, label: str, scenes: tuple[ProbeScene, ProbeScene],
+def compare(one: Adapter, other: Adapter, condition: Lighting, label: str, scenes: tuple[ProbeScene, ProbeScene],
             threshold: float) -> Disagreement | None:
     """The two adapters' clear glasses under one condition (two renders each, at these two scenes'
     seeds): a Disagreement when they differ beyond the noise by more than ``threshold``."""
@@ -135,7 +135,7 @@ def _kind(one: Adapter, other: Adapter, kind: Reference | str | None) -> Referen
     return kind if both else None
 
 
-def calibration_floor(one: Adapter, other: Adapter, condition: str, label: str,
+def calibration_floor(one: Adapter, other: Adapter, condition: Lighting, label: str,
                       scenes: tuple[ProbeScene, ProbeScene], kind: Reference | str | None = None) -> Disagreement | None:
     """The two adapters' white Lambertians (or their references of this kind, where both declare one) under one condition (two renders each, at these two scenes' seeds), compared pixel by pixel: a
     Disagreement when they differ beyond the noise by `FLOOR_MIN` or more."""

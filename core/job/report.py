@@ -20,6 +20,7 @@ from ..data.metrics import beyond_noise
 from ..data.model import Strict as _Strict
 from ..data.model import WithDerived
 from ..data.scene import ProbeScene
+from ..data.settings import Scheme
 from ..data.versioned import JsonFormat, check_version, parse, read_json
 from ..engine.results import Check, EngineResult, StageResult
 from ..engine.tuning import ENGINE_VERSION
@@ -118,8 +119,8 @@ class Report(WithDerived):
     renders_by_resolution: dict[str, int]
     source_renders: int
     seconds: float
-    scheme: str
-    scheme_used: str
+    scheme: Scheme
+    scheme_used: Scheme
     verdict: Status = Field(description="ok (holds under the scene's lights and every held-out one); mismatch "
                                         "(only a model mismatch: the closest this target model gets); unreliable "
                                         "(see findings); unchecked (nothing unreliable where it was checked, but "

@@ -40,7 +40,7 @@ class MapRecord(Strict):
 class TexturedCheck(Strict):
     """The textured source and the textured result on the probe sphere, each by its own renderer."""
 
-    condition: str = Field(description="scene (the job's lights: where the highlight runs over the texture) or "
+    condition: Lighting = Field(description="scene (the job's lights: where the highlight runs over the texture) or "
                                        "environment (the studio: every texel lit).")
     resolution: int
     spp: int

@@ -116,3 +116,17 @@ def test_shipped_experiments_load(root):
 
 def test_three_points_are_too_few_to_call_a_cliff():
     assert find_cliffs([0, 1, 2], [0.0, 0.01, 0.5], K, W, FLOOR) == []
+
+
+def test_a_side_param_is_parsed_once_and_written_as_it_was_given():
+    from brdfremap.core.experiments.spec import Side, SideParam
+
+    exp = Experiment.model_validate(_exp(plot={"x": "source.int_ior", "y": "back.alpha"}))
+    assert exp.plot.x == SideParam(Side.SOURCE, "int_ior") and exp.plot.y.side is Side.BACK
+    assert exp.compared() == "int_ior" and str(exp.plot.y) == "back.alpha"
+    assert exp.model_dump()["plot"]["x"] == "source.int_ior" and '"y":"back.alpha"' in exp.model_dump_json()
+    assert Experiment.model_validate_json(exp.model_dump_json()) == exp
+    for bad in ("int_ior", "front.alpha", "source.", ".alpha"):
+        with pytest.raises(ValueError, match=f"plot.y: must look like source.<name>, target.<name> or "
+                                             f"back.<name>, not '{bad}'"):
+            SideParam.parse(bad, "plot.y")

@@ -192,3 +192,22 @@ def test_a_study_fits_the_given_inputs_and_a_job_from_a_file_names_its_keys():
     assert Where().fix_field("alpha") == "--fix alpha" and Where().field("--scene", "scene") == "--scene"
     filed = Where(fix_prefix="target.fix", command_line=False)
     assert filed.fix_field("alpha") == "target.fix.alpha" and filed.field("--scene", "scene") == "scene"
+
+
+def test_lightings_and_schemes_are_typed_and_written_as_their_strings(tmp_path):
+    """A report's conditions and schemes are enum members in Python, their strings in result.json:
+    the document reads back with the same members and writes the same text (issue 46)."""
+    from brdfremap.core.data.scene import Lighting
+    from brdfremap.core.data.settings import Scheme
+
+    report = _report(tmp_path).report
+    assert isinstance(report.scheme, Scheme) and isinstance(report.scheme_used, Scheme)
+    conditions = [c.condition for c in report.validation] + \
+        [f.condition for f in report.findings if isinstance(getattr(f, "condition", None), str)]
+    assert conditions and all(isinstance(c, Lighting) for c in conditions)
+    text = json.dumps(report.document(), sort_keys=True)
+    assert f'"scheme": "{report.scheme.value}"' in text and f'"condition": "{conditions[0].value}"' in text
+    again = parse_report(json.loads(text), "r.json")
+    assert json.dumps(again.document(), sort_keys=True) == text
+    assert again.scheme is report.scheme
+    assert [c.condition for c in again.validation] == [c.condition for c in report.validation]
