@@ -16,8 +16,9 @@ import numpy as np
 
 
 def fit(roughness: float, grey: float, ior: float, start: dict | None = None) -> tuple[dict, float]:
-    from brdfremap.core.job.execute import run_job
-    from brdfremap.core.job.job import Job, Target
+    from brdfremap.core.job.execute import run_in_worker
+    from brdfremap.core.job.job import Job, Target, resolve
+    from brdfremap.core.host.plugins import collect_adapters
     from brdfremap.core.data.schemas import Material
     from brdfremap.core.data.settings import Settings
 
@@ -26,7 +27,7 @@ def fit(roughness: float, grey: float, ior: float, start: dict | None = None) ->
     settings = Settings(validation="none", **({"starts": 1} if start else {}))
     job = Job(source=source, target=Target(adapter="mitsuba", model="roughplastic", fix={"distribution": "ggx"}),
               settings=settings, start=start)
-    report = run_job(job).report
+    report = run_in_worker(resolve(job, collect_adapters())).report  # this process's adapters, kept between fits
     return dict(report.params), report.metrics.relative_rmse
 
 

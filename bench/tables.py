@@ -45,7 +45,7 @@ def accuracy(args) -> None:
 
     registry = collect_adapters()
     rows, tails = [], []
-    with workers(args.jobs) as w, adapter_pool(registry):
+    with workers(args.jobs) as w, adapter_pool(registry) as adapters:
         for path in args.tables:
             t0 = time.perf_counter()
             table = read_table(path)
@@ -57,8 +57,8 @@ def accuracy(args) -> None:
                                         params={**spec.source.params, **values}, name=f"r{i:03d}"),
                         target=spec.target, scene=table.scene, settings=settings, label=f"bench r{i:03d}")
                     for i, values in enumerate(drawn)]
-            direct = Runner(store, w, quiet=args.quiet, stop_on_error=False).run(
-                [Task(f"direct/r{i:03d}", resolve(job, registry).job, f"direct r{i:03d}") for i, job in enumerate(jobs)])
+            direct = Runner(store, w, adapters, quiet=args.quiet, stop_on_error=False).run(
+                [Task(f"direct/r{i:03d}", resolve(job, registry), f"direct r{i:03d}") for i, job in enumerate(jobs)])
             d_err = np.array([_err(d) for d in direct])
             a_err = np.array([_err(d, start=True) for d in direct])  # the exporters' conversion
             for method in (args.maps.split(",") if args.maps else [table.chosen]):
@@ -66,9 +66,10 @@ def accuracy(args) -> None:
                     raise SystemExit(f"{path}: no map {method!r} (its maps: {', '.join(table.candidates)})")
                 tmap = TableMap(table, method)
                 lookups = [Task(f"lookup/{method}/r{i:03d}", resolve(job.model_copy(update={
-                    "lookup": look_up(table, tmap, values).lookup}), registry).job, f"lookup r{i:03d}")
+                    "lookup": look_up(table, tmap, values).lookup}), registry), f"lookup r{i:03d}")
                     for i, (job, values) in enumerate(zip(jobs, drawn))]
-                l_err = np.array([_err(d) for d in Runner(store, w, quiet=args.quiet, stop_on_error=False).run(lookups)])
+                l_err = np.array([_err(d) for d in Runner(store, w, adapters, quiet=args.quiet,
+                                                          stop_on_error=False).run(lookups)])
                 ratio, analytic = l_err / d_err, a_err / d_err
                 ok = np.isfinite(ratio)
                 rows.append((table.name, method, int(ok.sum()), float(np.median(ratio[ok])),

@@ -43,7 +43,7 @@ def main() -> None:
     n = args.size
     drawn, held = _drawn(table, registry, n * n, args.seed)
     with workers(args.jobs) as w, adapter_pool(registry) as adapters:
-        fits, looked = _fit_each_texel(table, tmap, registry, w, drawn, args.out)
+        fits, looked = _fit_each_texel(table, tmap, registry, w, adapters, drawn, args.out)
         src_maps = _source_maps(table, drawn, n)
         table_maps, fitted_maps, seconds = _target_maps(table, tmap, registry, src_maps, fits, n)
         rows = _render_and_compare(table, adapters, registry, src_maps, table_maps, fitted_maps)
@@ -64,7 +64,7 @@ def _drawn(table, registry, count: int, seed: int) -> tuple[list[dict], dict]:
     return [{**d, **held} for d in drawn], held
 
 
-def _fit_each_texel(table, tmap, registry, w, drawn, out):
+def _fit_each_texel(table, tmap, registry, w, adapters, drawn, out):
     """Each texel's uniform material fitted directly, and looked up (ordinary jobs, resumable)."""
     from brdfremap.core.job.job import Job, resolve
     from brdfremap.core.run.runner import Runner, Task
@@ -79,12 +79,12 @@ def _fit_each_texel(table, tmap, registry, w, drawn, out):
     for i, values in enumerate(drawn):
         src = Material(adapter=spec.source.adapter, model=spec.source.model, params={**spec.source.params, **values},
                        name=f"t{i:03d}")
-        job = resolve(Job(source=src, target=spec.target, scene=table.scene, settings=settings), registry).job
-        tasks.append(Task(f"texels/t{i:03d}", job, f"texel {i}"))
+        resolved = resolve(Job(source=src, target=spec.target, scene=table.scene, settings=settings), registry)
+        tasks.append(Task(f"texels/t{i:03d}", resolved, f"texel {i}"))
         lk = look_up(table, tmap, values).lookup
-        lookups.append(Task(f"lookups/t{i:03d}", resolve(job.model_copy(update={"lookup": lk}), registry).job,
+        lookups.append(Task(f"lookups/t{i:03d}", resolve(resolved.job.model_copy(update={"lookup": lk}), registry),
                             f"lookup {i}"))
-    done = Runner(Store(out), w, quiet=True, stop_on_error=False).run(tasks + lookups)
+    done = Runner(Store(out), w, adapters, quiet=True, stop_on_error=False).run(tasks + lookups)
     return done[:len(drawn)], done[len(drawn):]
 
 

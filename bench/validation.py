@@ -99,8 +99,8 @@ def _renderers(pool, case: tuple):
     scene = ProbeScene()
     src_ad, tgt_ad = pool[source["adapter"]], pool[adapter]
     s_params = src_ad.models[source["model"]].complete(source["params"])
-    src = CachedRenderer(src_ad, source["adapter"], source["model"], scene)
-    tgt = CachedRenderer(tgt_ad, adapter, model, scene)
+    src = CachedRenderer(src_ad, source["adapter"], src_ad.models[source["model"]], scene)
+    tgt = CachedRenderer(tgt_ad, adapter, tgt_ad.models[model], scene)
     return scene, s_params, src, tgt, tgt_ad.models[model]
 
 

@@ -5,10 +5,11 @@ from .data.errors import AdapterUnavailableError, ConfigError, OptimisationError
 from .data.scene import ProbeScene
 from .data.schemas import LobeSpec, Material, ModelSpec, ParamSpec
 from .host.hookspecs import hookimpl
+from .host.model import Model
 from .host.protocol import Adapter
 
 __version__ = "0.1.0"
 __all__ = [
-    "hookimpl", "Adapter", "Appearance", "ProbeScene", "ModelSpec", "ParamSpec", "LobeSpec", "Material",
+    "hookimpl", "Adapter", "Model", "Appearance", "ProbeScene", "ModelSpec", "ParamSpec", "LobeSpec", "Material",
     "RemapError", "ConfigError", "AdapterUnavailableError", "RenderError", "OptimisationError",
 ]

@@ -18,6 +18,7 @@ import numpy as np
 from brdfremap.core.data.appearance import Appearance
 from brdfremap.core.data.atomic import temp_beside, write_text_atomic
 from brdfremap.core.data.errors import ConfigError, RenderError
+from brdfremap.core.host.model import Model
 from brdfremap.core.protocol import Adapter, ModelChoice
 from brdfremap.core.data.scene import ProbeScene
 from brdfremap.core.data.schemas import Lobe, TRANSMISSION_DEPTH, Value
@@ -170,12 +171,13 @@ class CyclesAdapter(Adapter):
         return {"renderer": f"Blender {self.worker.hello.get('blender', '?')} (Cycles, CPU)",
                 "worker_restarts": self.worker.restarts}
 
-    @staticmethod
-    def _request(model: str, params: dict[str, Value], scene: ProbeScene) -> tuple[str, dict[str, Any]]:
+    @classmethod
+    def _request(cls, model: Model | str, params: dict[str, Value], scene: ProbeScene) -> tuple[str, dict[str, Any]]:
         import json
 
-        req = {"model": model, "params": {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()},
-               "scene": scene.document(), "depth": depth(MODELS[model].transmissive(params))}
+        model = cls.as_model(model)
+        req = {"model": model.name, "params": {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()},
+               "scene": scene.document(), "depth": depth(model.transmissive(params))}
         return json.dumps(req, sort_keys=True), req
 
     def _cached(self, key: str, lobe: str | None) -> dict[str, np.ndarray] | None:
@@ -204,7 +206,7 @@ class CyclesAdapter(Adapter):
         if len(self._passes) > self.max_cached:
             self._passes.popitem(last=False)
 
-    def render(self, model: str, params: dict[str, Value], scene: ProbeScene, lobe: str | None = None) -> np.ndarray:
+    def render(self, model: Model | str, params: dict[str, Value], scene: ProbeScene, lobe: str | None = None) -> np.ndarray:
         if self.n_workers > 1 and not self._extra:
             self._start_extras()
         key, req = self._request(model, params, scene)
@@ -281,19 +283,13 @@ class CyclesAdapter(Adapter):
             self._start_extras()
         return [self.worker, *self._extra]
 
-    def appearance(self, model: str, params: dict[str, Value]) -> Appearance | None:
-        return _appearance.appearance(model, params)
-
-    def from_appearance(self, model: str, appearance: Appearance, base: dict[str, Value]) -> dict[str, Value]:
-        return _appearance.from_appearance(model, appearance, base)
-
     def model_for(self, appearance: Appearance) -> ModelChoice:
         return ModelChoice(*_appearance.model_for(appearance))
 
     def alternatives(self, appearance: Appearance) -> list[ModelChoice]:
         return [ModelChoice(*x) for x in _appearance.alternatives(appearance)]
 
-    def render_textured(self, model: str, params: dict[str, Value], maps: dict[str, TextureMap],
+    def render_textured(self, model: Model | str, params: dict[str, Value], maps: dict[str, TextureMap],
                         scene: ProbeScene) -> np.ndarray:
         """The probe mesh (its UV map) with an Image Texture node per map: the values written as
         float EXRs and read as Non-Color (as they are)."""
@@ -336,9 +332,9 @@ class CyclesAdapter(Adapter):
             except OSError:
                 pass
 
-    def write_native(self, model: str, params: dict[str, Value], out_dir: Path,
+    def write_native(self, model: Model | str, params: dict[str, Value], out_dir: Path,
                      textures: dict[str, Texture] | None = None) -> list[Path]:
-        out_dir = Path(out_dir)
+        out_dir, model = Path(out_dir), self.as_model(model).name
         blend = out_dir / "material.blend"
         tmp = temp_beside(blend)
         try:

@@ -5,31 +5,19 @@ from __future__ import annotations
 
 from brdfremap.core.data.schemas import Value
 
-# model -> (node type, {param: node input name}, {choice param: node property})
-NODES: dict[str, tuple[str, dict[str, str], dict[str, str]]] = {
-    "principled": ("ShaderNodeBsdfPrincipled", {
-        "base_color": "Base Color", "metallic": "Metallic", "roughness": "Roughness", "ior": "IOR",
-        "specular_ior_level": "Specular IOR Level", "specular_tint": "Specular Tint",
-        "anisotropic": "Anisotropic", "anisotropic_rotation": "Anisotropic Rotation",
-        "coat_weight": "Coat Weight", "coat_roughness": "Coat Roughness", "coat_ior": "Coat IOR",
-        "coat_tint": "Coat Tint", "sheen_weight": "Sheen Weight", "sheen_roughness": "Sheen Roughness",
-        "sheen_tint": "Sheen Tint", "diffuse_roughness": "Diffuse Roughness", "subsurface_weight": "Subsurface Weight",
-        "subsurface_radius": "Subsurface Radius", "subsurface_scale": "Subsurface Scale",
-        "subsurface_ior": "Subsurface IOR", "subsurface_anisotropy": "Subsurface Anisotropy",
-        "transmission_weight": "Transmission Weight", "thin_film_thickness": "Thin Film Thickness",
-        "thin_film_ior": "Thin Film IOR", "alpha": "Alpha",
-    }, {"distribution": "distribution", "subsurface_method": "subsurface_method"}),
-    "glossy": ("ShaderNodeBsdfGlossy", {"color": "Color", "roughness": "Roughness"}, {"distribution": "distribution"}),
-    "diffuse": ("ShaderNodeBsdfDiffuse", {"color": "Color", "roughness": "Roughness"}, {}),
-    "metallic": ("ShaderNodeBsdfMetallic", {"ior": "IOR", "extinction": "Extinction", "roughness": "Roughness"},
-                 {"distribution": "distribution"}),
-}
-# Node properties set once, not parameters.
-FIXED_PROPS: dict[str, dict[str, str]] = {"metallic": {"fresnel_type": "PHYSICAL_CONDUCTOR"}}
+def _nodes() -> tuple[dict, dict, set]:
+    from .models import MODELS
+
+    nodes = {name: (m.node, dict(m.inputs), dict(m.props)) for name, m in MODELS.items()}
+    fixed = {name: dict(m.fixed_props) for name, m in MODELS.items() if m.fixed_props}
+    vectors = {(name, p) for name, m in MODELS.items() for p in m.vector_inputs}
+    return nodes, fixed, vectors
 
 
-# RGB parameters on 3-float vector sockets rather than RGBA colour sockets.
-VECTOR_SOCKETS = {("metallic", "ior"), ("metallic", "extinction"), ("principled", "subsurface_radius")}
+NODES, FIXED_PROPS, VECTOR_SOCKETS = _nodes()
+"""Each model's node (its type, {param: node input name}, {choice param: node property}), the node
+properties set once, and the RGB parameters on 3-float vector sockets rather than RGBA colour
+sockets: each model's own (`models`), by name, for the worker and the Python snippet."""
 
 
 def socket(node, name: str):

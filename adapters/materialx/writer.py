@@ -43,9 +43,7 @@ class MaterialXWriter:
         m = mx()
         doc = m.createDocument()
         doc.setDocString("brdf-remap: converted materials as OpenPBR (Blender's Principled BSDF follows OpenPBR)")
-        for item in items:
-            if item.model != "principled":
-                continue
+        for item in items:  # each a Principled BSDF (`models`: the library hands it no other)
             params = PRINCIPLED.complete(item.params)
             name = doc.createValidChildName(item.name)
             shader = doc.addNode("open_pbr_surface", doc.createValidChildName(f"{name}_shader"), "surfaceshader")

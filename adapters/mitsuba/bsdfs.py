@@ -87,8 +87,15 @@ def fresnel_conductor_np(cos_i: np.ndarray, eta: np.ndarray, k: np.ndarray) -> n
 
 @lru_cache(maxsize=None)
 def conductor_preset(name: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """RGB eta and k of a Mitsuba 3 conductor preset, as Mitsuba's own roughconductor reads them."""
+    """RGB eta and k of a Mitsuba 3 conductor preset, as Mitsuba's own roughconductor reads them (in
+the variant the adapter uses: chosen here where nothing has set one, as when a library is read
+before any render)."""
     import mitsuba as mi
+
+    if mi.variant() is None:
+        from .variant import choose_variant
+
+        mi.set_variant(choose_variant().variant)
 
     logger = mi.logger() if hasattr(mi, "logger") else mi.Thread.thread().logger()
     level = logger.log_level()

@@ -220,16 +220,10 @@ def _params(doc: _Document, elem: ET.Element, model: str, notes: list[str],
         params["alpha"] = math.sqrt(au * av)
         notes.append(f"anisotropic (alpha_u {au:g}, alpha_v {av:g}): {model} is isotropic here, read as alpha "
                      f"{params['alpha']:.4g}")
-    if model == "principled" and "eta" in params:  # Mitsuba's principled takes eta or specular: one thing
-        eta = float(params.pop("eta"))
-        params["specular"] = min(((eta - 1.0) / (eta + 1.0)) ** 2 / 0.08, 1.0)
-        notes.append(f"eta {eta:g} read as specular {params['specular']:.4g} (F0 = 0.08 x specular)")
+    params = spec.from_file(params, notes)
     ext = params.pop("ext_ior", None)
     if ext is not None and abs(float(ext) - NAMED_IOR["air"]) > 1e-3:
         notes.append(f"ext_ior {float(ext):g} is read as air (the model's exterior)")
-    if model in ("roughconductor", "conductor") and params.get("material", "none") == "none":
-        params.setdefault("eta", (0.0, 0.0, 0.0))  # Mitsuba's default: a perfect mirror (eta 0, k 1)
-        params.setdefault("k", (1.0, 1.0, 1.0))
     notes += clip_into(spec, params)
     return params, textured
 

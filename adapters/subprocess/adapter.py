@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 from brdfremap.core.data.errors import ConfigError, RenderError, RenderTimeoutError
 from brdfremap.core.data.imageio import HALF_EPS, pixel_format, read_rgb
+from brdfremap.core.host.model import Model
 from brdfremap.core.protocol import Adapter
 from brdfremap.core.data.scene import ProbeScene
 from brdfremap.core.data.schemas import Value, format_value
@@ -123,7 +124,9 @@ class SubprocessAdapter(Adapter):
         message = f"renderer {self.definition.name!r} ({model}: {shown}): {what}{tail}"
         return RenderError(message) if timed_out is None else RenderTimeoutError(message, seconds=timed_out)
 
-    def render(self, model: str, params: dict[str, Value], scene: ProbeScene, lobe: str | None = None) -> np.ndarray:
+    def render(self, model: Model | str, params: dict[str, Value], scene: ProbeScene,
+               lobe: str | None = None) -> np.ndarray:
+        model = self.as_model(model).name  # the definition's models and its files name it
         d = self.definition
         p = self.models[model].with_lobe(params, lobe)
         job = self.work / f"r{next(self._ids)}"
@@ -172,8 +175,9 @@ class SubprocessAdapter(Adapter):
             pool.shutdown(wait=True, cancel_futures=True)
             self._stopping.clear()
 
-    def write_native(self, model: str, params: dict[str, Value], out_dir: Path) -> list[Path]:
+    def write_native(self, model: Model | str, params: dict[str, Value], out_dir: Path) -> list[Path]:
         """The model's `native:` text with the fitted values, when the definition gives one."""
+        model = self.as_model(model).name
         native = self.definition.models[model].native
         if native is None:
             return []

@@ -7,7 +7,8 @@ from pathlib import Path
 from typing import Any, Literal
 
 from brdfremap.core.data.configio import load_yaml_model
-from brdfremap.core.data.schemas import Lobe, LobeSpec, ModelSpec, ParamKind, ParamSpec
+from brdfremap.core.data.schemas import Lobe, LobeSpec, ParamKind, ParamSpec
+from brdfremap.core.host.model import Model
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 FORMAT = 2
@@ -161,7 +162,7 @@ class RendererDef(BaseModel):
         return [f"{msg}; read as format 1 gave them to the specular stage, as it is read now (add `format: "
                 f"{FORMAT}` once changed)" for msg in map(_ambiguous, self.models, self.models.values()) if msg]
 
-    def model_specs(self) -> dict[str, ModelSpec]:
+    def model_specs(self) -> dict[str, Model]:
         specs = {}
         for name, m in self.models.items():
             numeric = [p.name for p in m.parameters if p.kind != ParamKind.CHOICE]
@@ -183,8 +184,8 @@ class RendererDef(BaseModel):
                     lobes[lobe] = LobeSpec(overrides=v, params=tuple(dict.fromkeys(mine)))
                 else:
                     lobes[lobe] = LobeSpec(**v)
-            specs[name] = ModelSpec(name=name, description=m.description, parameters=tuple(m.parameters),
-                                    lobes=lobes)
+            specs[name] = Model(name=name, description=m.description, parameters=tuple(m.parameters),
+                                lobes=lobes)
         return specs
 
 

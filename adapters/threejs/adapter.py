@@ -22,9 +22,9 @@ from brdfremap.core.data.environment import radiance
 from brdfremap.core.data.scene import EnvironmentLight, PointLight, ProbeScene
 from brdfremap.core.data.schemas import Value
 from brdfremap.core.data.textures import Texture, TextureMap
+from brdfremap.core.host.model import Model
 from brdfremap.core.host.protocol import Adapter, ModelChoice, check_image
 
-from . import appearance as _appearance
 from . import gltf
 from . import textures as _textures
 from .browser import THREE, WEB, Page, chromium
@@ -108,16 +108,19 @@ class ThreeJsAdapter(Adapter):
         return {"renderer": f"three.js r{self.page.info.get('three', '?')} in headless Chromium",
                 "gl": self.page.info.get("renderer", "?"), "startup_seconds": round(self.page.startup_seconds, 2)}
 
-    def render(self, model: str, params: dict[str, Value], scene: ProbeScene, lobe: str | None = None) -> np.ndarray:
+    def render(self, model: Model | str, params: dict[str, Value], scene: ProbeScene,
+               lobe: str | None = None) -> np.ndarray:
+        model = self.as_model(model)
         if lobe is not None:
-            raise ValueError(f"threejs: model {model!r} has no lobes to render alone")
-        return self.render_document(gltf.document(params, MODELS[model]), scene)
+            raise ValueError(f"threejs: model {model.name!r} has no lobes to render alone")
+        return self.render_document(gltf.document(params, model), scene)
 
-    def render_textured(self, model: str, params: dict[str, Value], maps: dict[str, TextureMap],
+    def render_textured(self, model: Model | str, params: dict[str, Value], maps: dict[str, TextureMap],
                         scene: ProbeScene) -> np.ndarray:
         """The maps as the glTF textures `write_native` writes (8-bit PNGs in the document), read by
         GLTFLoader, on a sphere of the probe's texture coordinates."""
-        return self.render_document(gltf.document(MODELS[model].complete(params), MODELS[model], maps=maps), scene)
+        model = self.as_model(model)
+        return self.render_document(gltf.document(model.complete(params), model, maps=maps), scene)
 
     def render_document(self, doc: dict[str, Any], scene: ProbeScene) -> np.ndarray:
         """The first material of a glTF document, as three.js's GLTFLoader reads it, on the probe
@@ -149,21 +152,15 @@ class ThreeJsAdapter(Adapter):
         self.page.environment(key, environment_rows(radiance(light.map, light.scale, light.rotation)))
         return key
 
-    def appearance(self, model: str, params: dict[str, Value]) -> Appearance | None:
-        return _appearance.appearance(params)
-
-    def from_appearance(self, model: str, appearance: Appearance, base: dict[str, Value]) -> dict[str, Value]:
-        return _appearance.from_appearance(appearance, base)
-
     def model_for(self, appearance: Appearance) -> ModelChoice:
         kind = "a metal" if appearance.kind == Kind.CONDUCTOR else "a dielectric"
         return ModelChoice("gltf_pbr", {}, f"{kind}: glTF's metallic-roughness, the one model three.js reads")
 
-    def write_native(self, model: str, params: dict[str, Value], out_dir: Path,
+    def write_native(self, model: Model | str, params: dict[str, Value], out_dir: Path,
                      textures: dict[str, Texture] | None = None) -> list[Path]:
         """`material.gltf`: the material on a sphere; ``textures`` (files in ``out_dir``) embedded as
         glTF textures."""
-        spec = MODELS[model]
+        spec = self.as_model(model)
         maps = _textures.maps_from_files(Path(out_dir), textures, _textures.kinds(spec)) if textures else {}
         doc = sphere_document([("brdf-remap", params)], spec, [maps])
         return [write_text_atomic(Path(out_dir) / "material.gltf", json.dumps(doc, indent=1) + "\n")]

@@ -34,8 +34,8 @@ def run(kind: str, args: argparse.Namespace) -> int:
         raise ConfigError(f"is a {exp.kind} experiment: run it with `remap {exp.kind}`", file=args.experiment,
                           field="kind")
     registry = collect_adapters()
-    with workers(args.jobs, args.scheduler) as w, adapter_pool(registry):
-        r = run_experiment(exp, args.experiment, args.out, registry, w, quiet=args.quiet)
+    with workers(args.jobs, args.scheduler) as w, adapter_pool(registry) as adapters:
+        r = run_experiment(exp, args.experiment, args.out, registry, w, adapters, quiet=args.quiet)
     _print(r, args.out)
     return 0
 

@@ -94,10 +94,10 @@ def run(args: argparse.Namespace) -> int:
     header = (f"remap {source.adapter}:{source.model} -> {adapter}:{args.model}  ({scene.resolution}x"
               f"{scene.resolution}, {scene.spp} spp, scheme {settings.scheme}; fitting by default "
               f"{', '.join(resolved.free) or 'nothing'}{_carried_note(resolved.target_spec)})")
-    with owned(args.out) as folder, workers() as w, adapter_pool(registry):
-        runner = Runner(Store(folder), w, renderer_files=tuple(registry.loaded_files()), quiet=True,
-                        render_progress=RenderProgress(not args.quiet, header), reuse=not args.force)
-        (done,) = runner.run([Task("", resolved.job, str(args.source))])
+    with owned(args.out) as folder, workers() as w, adapter_pool(registry) as adapters:
+        runner = Runner(Store(folder), w, adapters, quiet=True, render_progress=RenderProgress(not args.quiet, header),
+                        reuse=not args.force)
+        (done,) = runner.run([Task("", resolved, str(args.source))])
     if done.redone and not args.quiet:
         print(f"note: the result that was in {folder} was replaced: {done.redone}", file=sys.stderr)
     print_report(done.report, folder, resumed=done.resumed)

@@ -48,8 +48,8 @@ def build(args: argparse.Namespace) -> int:
 
     spec = load_table_spec(args.spec)
     registry = collect_adapters()
-    with workers(args.jobs, args.scheduler) as w, adapter_pool(registry):
-        table = build_table(spec, args.spec, args.out, registry, w, quiet=args.quiet)
+    with workers(args.jobs, args.scheduler) as w, adapter_pool(registry) as adapters:
+        table = build_table(spec, args.spec, args.out, registry, w, adapters, quiet=args.quiet)
     _summary(table)
     print(f"wrote          {args.out}/table.json, {args.out}/points.csv")
     return 0
@@ -131,10 +131,10 @@ def lookup(args: argparse.Namespace) -> int:
             print(header, file=sys.stderr)
         _print_answer(resolved, answer, folder, files)
         return 0
-    with owned(args.out) as folder, workers() as w, adapter_pool(registry):
-        runner = Runner(Store(folder), w, renderer_files=tuple(registry.loaded_files()), quiet=True,
-                        render_progress=RenderProgress(not args.quiet, header), reuse=not args.force)
-        (done,) = runner.run([Task("", resolved.job, str(args.source))])
+    with owned(args.out) as folder, workers() as w, adapter_pool(registry) as adapters:
+        runner = Runner(Store(folder), w, adapters, quiet=True, render_progress=RenderProgress(not args.quiet, header),
+                        reuse=not args.force)
+        (done,) = runner.run([Task("", resolved, str(args.source))])
     print_report(done.report, folder, resumed=done.resumed)
     return 0
 
@@ -147,6 +147,7 @@ def _lookup_job(args: argparse.Namespace):
     from ..tables import TableMap, read_table
     from ..tables.lookup import axis_values, look_up
     from ..tables.texels import mean_values, read_inputs
+    from ..textured import texture_result
 
     t0 = time.perf_counter()
     if args.fix:
@@ -170,7 +171,7 @@ def _lookup_job(args: argparse.Namespace):
     answer.lookup = answer.lookup.model_copy(update={"file": str(_table_file(args.table))})
     job = Job(source=source, target=tgt, scene=options.scene_from(args, table.scene),
               settings=options.settings_from(args, table.spec.options), label=str(args.source), lookup=answer.lookup)
-    resolved = resolve(job, registry, Where(source_file=str(args.source)))
+    resolved = resolve(job, registry, Where(source_file=str(args.source)), textured=texture_result)
     header = (f"remap {source.adapter}:{source.model} -> {tgt.adapter}:{tgt.model} through the table {table.name!r} "
               f"({tmap.method} map): looked up in {answer.seconds * 1e3:.3f} ms (the table read in "
               f"{loaded * 1e3:.0f} ms)")

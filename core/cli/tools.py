@@ -159,7 +159,7 @@ def render(args: argparse.Namespace) -> int:
     adapter = registry.create(material.adapter)
     who = f"adapter {material.adapter!r} model {material.model!r}"
     try:  # a scene of several views: each rendered alone, stacked top to bottom
-        img = np.concatenate([check_image(adapter.render(material.model, params, view, args.lobe), view, who)
+        img = np.concatenate([check_image(adapter.render(spec, params, view, args.lobe), view, who)
                               for view in scene.view_scenes()])
     finally:
         adapter.close()

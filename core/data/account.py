@@ -115,7 +115,7 @@ class Metered:
     def unmetered(self) -> Any:
         return self._adapter
 
-    def render(self, model: str, params: dict, scene: Any, lobe: str | None = None) -> Any:
+    def render(self, model: Any, params: dict, scene: Any, lobe: str | None = None) -> Any:
         t0 = time.perf_counter()
         try:
             return self._adapter.render(model, params, scene, lobe)
@@ -131,7 +131,7 @@ class Metered:
                 self._ledger.add(self._side, sum(_pixel_samples(r[2]) for r in requests), time.perf_counter() - t0,
                                  renders=len(requests))
 
-    def render_textured(self, model: str, params: dict, maps: Any, scene: Any) -> Any:
+    def render_textured(self, model: Any, params: dict, maps: Any, scene: Any) -> Any:
         t0 = time.perf_counter()
         try:
             return self._adapter.render_textured(model, params, maps, scene)

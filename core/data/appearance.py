@@ -1,7 +1,7 @@
 """A material in renderer-neutral terms, and the Fresnel arithmetic exporters convert with.
 
-No renderer knowledge: a source adapter reads its parameters into an ``Appearance`` and a
-target adapter writes its own from one (``Adapter.appearance`` / ``from_appearance``). The
+No renderer knowledge: a source model reads its parameters into an ``Appearance`` and a
+target model writes its own from one (``Model.appearance`` / ``Model.from_appearance``). The
 session uses the pair as the fit's informed start; the fit corrects what the reading misses."""
 
 from __future__ import annotations

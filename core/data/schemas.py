@@ -190,7 +190,7 @@ class ModelSpec(_Strict):
     texturable: tuple[str, ...] = Field((), description="Parameters the renderer takes as an image, texel by "
                                                         "texel (`Adapter.render_textured`, native files).")
     derived: tuple[str, ...] = Field((), description="Quantities the adapter derives from the parameters "
-                                                     "(Adapter.derived: a conductor's reflectivity), for reports and "
+                                                     "(Model.derive: a conductor's reflectivity), for reports and "
                                                      "experiment plots.")
 
     @model_validator(mode="after")

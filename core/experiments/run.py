@@ -17,6 +17,7 @@ from ..data.scene import ProbeScene
 from ..data.schemas import Material
 from ..host.plugins import AdapterRegistry
 from ..job.job import Job, Where, model_of, resolve
+from ..job.execute import AdapterPool
 from ..run.executors import Workers
 from ..run.runner import Done, Runner, Task
 from ..run.store import Store, owned
@@ -26,8 +27,8 @@ from .spec import Experiment, ExperimentKind, Point, Side, label, points_of
 from .table import ExperimentResult, summary, write_csv
 
 
-def run_experiment(exp: Experiment, file: str, out: str | Path, registry: AdapterRegistry, workers: Workers, *,
-                   quiet: bool = False, renderer_files: tuple[str, ...] = ()) -> ExperimentResult:
+def run_experiment(exp: Experiment, file: str, out: str | Path, registry: AdapterRegistry, workers: Workers,
+                   adapters: AdapterPool, *, quiet: bool = False) -> ExperimentResult:
     t0 = time.perf_counter()
     scene = exp.scene.scene(Path(file).resolve().parent)
     points = points_of(exp)
@@ -39,7 +40,7 @@ def run_experiment(exp: Experiment, file: str, out: str | Path, registry: Adapte
     with owned(out) as folder:
         _check_outputs(folder, file)
         write_text_atomic(folder / "experiment.json", exp.model_dump_json(indent=2) + "\n")
-        runner = Runner(Store(folder / "points"), workers, renderer_files=renderer_files, quiet=quiet,
+        runner = Runner(Store(folder / "points"), workers, adapters, quiet=quiet,
                         line=lambda d, i, n: _line(exp, d, i, n))
         fwd = runner.run(forward)
         tgt_spec = registry.get(exp.target.adapter).models[exp.target.model]
@@ -94,7 +95,7 @@ def _forward_task(exp: Experiment, file: str, p: Point, scene: ProbeScene, regis
     where = Where(source_file=file, source_prefix="source.",
                   params_prefix=f"point {p.id} ({exp.sweep.param}={label(p.value)})",
                   target_file=file, target_prefix="target.", fix_prefix="target.fix", command_line=False)
-    return Task(p.id, resolve(job, registry, where).job, f"{p.id} {exp.sweep.param}={label(p.value)}")
+    return Task(p.id, resolve(job, registry, where), f"{p.id} {exp.sweep.param}={label(p.value)}")
 
 
 def _run_back(exp: Experiment, file: str, scene: ProbeScene, registry: AdapterRegistry, runner: Runner,
@@ -109,7 +110,7 @@ def _run_back(exp: Experiment, file: str, scene: ProbeScene, registry: AdapterRe
                                   name=f"{r.point.id} forward"),
                   target=back, scene=scene, settings=exp.options.for_study(),
                   label=f"{file} point {r.point.id} (forward result)")
-        tasks.append(Task(f"{r.point.id}/back", resolve(job, registry, where).job, f"{r.point.id} back"))
+        tasks.append(Task(f"{r.point.id}/back", resolve(job, registry, where), f"{r.point.id} back"))
     spec = registry.get(back.adapter).models[back.model]
     for r, d in zip(rows, runner.run(tasks)):
         r.back = Leg.of(d.report, spec, d.resumed)

@@ -12,6 +12,7 @@ import pluggy
 
 from ..data.errors import AdapterUnavailableError, ConfigError
 from . import hookspecs
+from .model import Model
 
 GROUP = "brdfremap"
 
@@ -49,6 +50,11 @@ class AdapterEntry:
         return None if check is None else check(scene)
 
     def unavailable_reason(self) -> str | None:
+        old = sorted(n for n, m in self.models.items() if not isinstance(m, Model))
+        if old:
+            return (f"its model {old[0]!r} is a plain ModelSpec: declare each model as a brdfremap.core.Model (the "
+                    "same fields; the protocol passes the model object, and a Model subclass carries its reading "
+                    "and converted start)")
         try:
             return self.factory.unavailable_reason()
         except Exception as exc:  # a broken plugin is listed with its error, not fatal

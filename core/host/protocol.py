@@ -10,10 +10,11 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ..data.appearance import Appearance
-from ..data.errors import RenderError
+from ..data.errors import ConfigError, RenderError
 from ..data.scene import ProbeScene
-from ..data.schemas import ModelSpec, Value
+from ..data.schemas import Value
 from ..data.textures import Texture, TextureMap
+from .model import Model
 
 
 @dataclass(frozen=True)
@@ -36,7 +37,9 @@ class Adapter(abc.ABC):
     every job's key, so stored results made with the old renders are redone)."""
     summary: ClassVar[str] = ""
     install_hint: ClassVar[str] = ""
-    models: ClassVar[dict[str, ModelSpec]] = {}
+    models: ClassVar[dict[str, Model]] = {}
+    """Its models by name, each one object (`core.host.model.Model`: parameters, conversions, and
+    what the adapter adds, its native form); the protocol's methods are passed one of them."""
     light_types: ClassVar[frozenset[str]] = frozenset({"point"})
     """The light types of `core.data.scene` this adapter realises, in the same units and orientation
     as every other (its calibration tests cover each)."""
@@ -79,14 +82,25 @@ class Adapter(abc.ABC):
         """Why this adapter cannot run here, or None. Must be cheap: no renderer import."""
         return None
 
+    @classmethod
+    def as_model(cls, which: "Model | str") -> Model:
+        """One of its models, given as itself or by name (a script or a test names it; the tool
+        passes the object). An unknown name is a ConfigError listing the models."""
+        if isinstance(which, Model):
+            return which
+        if which not in cls.models:
+            raise ConfigError(f"adapter {cls.name!r} has no model {which!r} (models: {', '.join(sorted(cls.models))})")
+        return cls.models[which]
+
     @abc.abstractmethod
-    def render(self, model: str, params: dict[str, Value], scene: ProbeScene, lobe: str | None = None) -> np.ndarray:
+    def render(self, model: Model, params: dict[str, Value], scene: ProbeScene, lobe: str | None = None) -> np.ndarray:
         """Render the probe scene: linear float32 H x W x 3, no tone mapping.
 
+        ``model`` is one of `models` (the shipped adapters also take its name, through `as_model`).
         ``params`` is complete and validated (see ``ModelSpec.complete``). ``lobe`` is None for
         the full material, or "diffuse" / "specular" for that lobe alone."""
 
-    def render_textured(self, model: str, params: dict[str, Value], maps: dict[str, TextureMap],
+    def render_textured(self, model: Model, params: dict[str, Value], maps: dict[str, TextureMap],
                         scene: ProbeScene) -> np.ndarray:
         """Render the probe sphere with some parameters driven by images (``maps``, of `texturable`
         parameters, their values used as they are: no colour conversion), laid over the sphere by
@@ -94,7 +108,7 @@ class Adapter(abc.ABC):
         for an adapter whose ``textures`` is true."""
         raise RenderError(f"adapter {self.name!r} does not render textures")
 
-    def render_batch(self, requests: list[tuple[str, dict[str, Value], ProbeScene, str | None]]) -> list[np.ndarray]:
+    def render_batch(self, requests: list[tuple[Model, dict[str, Value], ProbeScene, str | None]]) -> list[np.ndarray]:
         """Several renders (model, params, scene, lobe) at once; an adapter with several workers
         runs them in parallel. The default renders them one after the other."""
         return [self.render(*r) for r in requests]
@@ -116,24 +130,6 @@ class Adapter(abc.ABC):
         """Runtime facts for reports (renderer version, variant, device)."""
         return {}
 
-    def derived(self, model: str, params: dict[str, Value]) -> dict[str, Value]:
-        """Quantities that follow from the parameters, for reports and experiment plots (e.g. a
-        conductor's normal-incidence reflectivity from its complex IOR). Must not render."""
-        return {}
-
-    def appearance(self, model: str, params: dict[str, Value]) -> Appearance | None:
-        """The material in renderer-neutral terms, as an exporter would read it, or None when this
-        model has no such reading. Used as a source: it gives the fit its informed start. Must not render."""
-        return None
-
-    def from_appearance(self, model: str, appearance: Appearance, base: dict[str, Value]) -> dict[str, Value]:
-        """This model's parameters for a neutral description by the exporters' conventions (the
-        fit's informed start; the fit corrects them), or {} when there is no such conversion.
-        ``base`` is the model's complete parameters as they stand (defaults, --fix), for a
-        conversion that depends on one the fit keeps. Only fitted parameters are used; values
-        out of bounds are clipped by the caller. Must not render."""
-        return {}
-
     def model_for(self, appearance: Appearance) -> "ModelChoice | None":
         """The model a material of this appearance converts to when the user names only this
         adapter (`remap convert --to ADAPTER`), with the choices to hold (a distribution the
@@ -146,12 +142,7 @@ class Adapter(abc.ABC):
         mismatch or unreliable (`remap convert`), and the best result kept. Must not render."""
         return []
 
-    def notes(self, model: str, params: dict[str, Value]) -> list[str]:
-        """What the renderer does to these parameters that the image cannot show the optimiser,
-        e.g. a reflectance it trims to conserve energy. A note makes a fitted result unreliable."""
-        return []
-
-    def write_native(self, model: str, params: dict[str, Value], out_dir: Path,
+    def write_native(self, model: Model, params: dict[str, Value], out_dir: Path,
                      textures: dict[str, Texture] | None = None) -> list[Path]:
         """Write the material in the renderer's own form; return the files written. ``textures``
         (an adapter whose ``textures`` is true): parameters read from images already in ``out_dir``

@@ -68,7 +68,8 @@ class AdapterContract:
         return self.adapter.models[model].complete(given)
 
     def _render(self, model, params, scene, lobe=None):
-        return self.adapter.render(model, params, scene, lobe)
+        """A render of a model named as the checks name it (the adapter is passed its object)."""
+        return self.adapter.render(self.adapter.models[model], params, scene, lobe)
 
     def _white(self) -> tuple[str, dict] | None:
         given = self.calibration or getattr(self.factory, "calibration", None)
@@ -92,7 +93,7 @@ class AdapterContract:
     def test_images(self):
         environment = LightType.ENVIRONMENT in self.factory.light_types
         for model, spec in self.adapter.models.items():  # what `render` returns, before `check` reads it
-            img = self.adapter.render(model, self._params(model), scene_for(spec, self.scene, environment))
+            img = self.adapter.render(spec, self._params(model), scene_for(spec, self.scene, environment))
             assert isinstance(img, np.ndarray) and img.dtype == np.float32, f"{model}: {type(img)} {img.dtype}"
         self._holds(check.images(self._render, self.adapter.models, environment))
 
@@ -126,14 +127,14 @@ class AdapterContract:
             spec.complete({})  # defaults are valid
 
     def test_derived_quantities_are_declared(self):
-        """What ``derived`` returns for a model's defaults is declared in its ``ModelSpec.derived``
+        """What ``Model.derive`` returns for a model's defaults is declared in its ``derived``
         (an experiment's plot is checked against them before any render)."""
         for name, spec in self.adapter.models.items():
-            got = set(self.adapter.derived(name, spec.complete({})))
+            got = set(spec.derive(spec.complete({})))
             assert got <= set(spec.derived), (name, sorted(got - set(spec.derived)))
 
     def test_neutral_reading_names_only_the_models_parameters(self):
-        """Optional: an adapter without ``appearance``/``from_appearance`` passes trivially. Each
+        """Optional: a model without ``appearance``/``from_appearance`` passes trivially. Each
         reading of a model's defaults is an Appearance; each conversion into a model names only
         its parameters, and they complete (validate) once clipped to their bounds."""
         from ..data.appearance import Appearance
@@ -142,10 +143,10 @@ class AdapterContract:
                  Appearance(kind="dielectric", alpha=0.2, specular=(0.04,) * 3, diffuse=(0.6, 0.1, 0.05), ior=1.5),
                  Appearance(kind="dielectric", diffuse=(0.8, 0.8, 0.8))]
         for name, spec in self.adapter.models.items():
-            look = self.adapter.appearance(name, spec.complete({}))
+            look = spec.appearance(spec.complete({}))
             assert look is None or isinstance(look, Appearance), name
             for a in looks:
-                conv = self.adapter.from_appearance(name, a, spec.complete({}))
+                conv = spec.from_appearance(a, spec.complete({}))
                 assert set(conv) <= set(spec.names), (name, set(conv) - set(spec.names))
                 spec.complete({k: spec.param(k).clip(v) for k, v in conv.items()})
 
@@ -153,10 +154,10 @@ class AdapterContract:
         """Repeatability across processes, not only within one (an adapter may cache images)."""
         other = self.factory()
         try:
-            for model in self.adapter.models:
+            for model, spec in self.adapter.models.items():
                 p = self._params(model)
-                a = self.adapter.render(model, p, self.scene)
-                c = other.render(model, p, self.scene)
+                a = self.adapter.render(spec, p, self.scene)
+                c = other.render(other.models[model], p, self.scene)
                 assert np.array_equal(a, c), f"{model}: two renders with one seed differ"
         finally:
             other.close()
@@ -185,7 +186,7 @@ class AdapterContract:
                 assert self.factory.scene_problem(scene), f"{name}: an undeclared light type is not refused"
             if self.factory.scene_problem(scene):
                 continue  # refused before any render, with the reason
-            img = self.adapter.render(*white, scene)
+            img = self._render(*white, scene)
             hits = sphere_hits(scene)
             err = relative_rmse(analytic_lambert(scene, 0.8)[hits.interior], img[hits.interior])
             assert err < tolerance, f"{name}: white diffuse sphere {err:.2%} from the analytic radiance"

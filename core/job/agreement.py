@@ -50,8 +50,9 @@ def _blocks(img: np.ndarray) -> np.ndarray:
 
 
 def _pair(adapter: Adapter, kind: str, scenes: tuple[ProbeScene, ProbeScene]) -> tuple[np.ndarray, np.ndarray]:
-    model, given = adapter.glasses[kind]
-    params = adapter.models[model].complete(given)
+    name, given = adapter.glasses[kind]
+    model = adapter.models[name]
+    params = model.complete(given)
     return tuple(_blocks(check_image(adapter.render(model, params, sc), sc, f"adapter {adapter.name!r} {kind} glass"))
                  for sc in scenes)  # type: ignore[return-value]
 
@@ -122,8 +123,9 @@ def reference(adapter: Adapter, kind: Reference | None) -> tuple[str, dict] | No
 
 def _calibration_pair(adapter: Adapter, kind: Reference | None,
                       scenes: tuple[ProbeScene, ProbeScene]) -> tuple[np.ndarray, np.ndarray]:
-    model, given = reference(adapter, kind)  # type: ignore[misc]
-    params = adapter.models[model].complete(given)
+    name, given = reference(adapter, kind)  # type: ignore[misc]
+    model = adapter.models[name]
+    params = model.complete(given)
     return tuple(check_image(adapter.render(model, params, sc), sc, f"adapter {adapter.name!r} calibration material")
                  .astype(np.float64) for sc in scenes)  # type: ignore[return-value]
 

@@ -1,12 +1,14 @@
 """Run one job: render the source, fit the target, and produce its report and files in memory.
 
 This is where adapters meet the engine; it still knows no renderer by name. `run_job` is what
-an executor calls, in this process or in a worker process or on a Dask worker: it returns an
-`Outcome` (the report and the bytes of every file), which the caller's store writes."""
+an executor calls, in this process with the caller's adapters, `run_in_worker` in a worker process
+or on a Dask worker: each returns an `Outcome` (the report and the bytes of every file), which the
+caller's store writes. The job arrives resolved (`Resolved`: checked once, by whoever made it)."""
 
 from __future__ import annotations
 
 import atexit
+import functools
 import hashlib
 import math
 import tempfile
@@ -28,12 +30,13 @@ from ..data.schemas import Lobe, ParamKind, Value
 from ..data.settings import FitScene, Inputs, Start
 from ..engine import ProgressFn, remap
 from ..host.plugins import AdapterRegistry, collect_adapters
+from ..host.model import Model
 from ..host.protocol import Adapter
 from .fitscene import choose as choose_scene
-from .job import Job, Resolved, resolve
+from .job import Job, Resolved
 from .renders import CachedRenderer, ProbeRenders
 from .report import FileRecord, Report, build_report
-from .texturing import Texturing, texture_result, textured_findings
+from .texturing import Texturing, textured_findings
 from ..data.scene import LightType, ProbeScene
 from ..engine.schedule import highlight_pixels
 
@@ -54,7 +57,8 @@ class Outcome:
 
 class AdapterPool:
     """The adapters one process has open: each constructed once (this is where renderers get
-    imported and workers start) and closed together."""
+    imported and workers start) and closed together. Passed to whatever renders: nothing finds
+    it by itself."""
 
     def __init__(self, registry: AdapterRegistry):
         self.registry = registry
@@ -71,7 +75,6 @@ class AdapterPool:
         self.open.clear()
 
 
-_POOL: AdapterPool | None = None
 _ONE_AT_A_TIME = threading.Lock()
 """A process runs one job at a time: its adapters (a Mitsuba scene updated in place, a Blender
 worker) are shared by every job of the process."""
@@ -79,34 +82,37 @@ worker) are shared by every job of the process."""
 
 @contextmanager
 def adapter_pool(registry: AdapterRegistry) -> Iterator[AdapterPool]:
-    """Jobs run in this process use ``registry``'s adapters until the block ends, then close them."""
-    global _POOL
-    previous, _POOL = _POOL, AdapterPool(registry)
+    """``registry``'s adapters, opened as jobs need them, closed when the block ends."""
+    pool = AdapterPool(registry)
     try:
-        yield _POOL
+        yield pool
     finally:
-        _POOL.close()
-        _POOL = previous
+        pool.close()
 
 
-def _pool(renderer_files: tuple[str, ...]) -> AdapterPool:
-    """This process's pool: the one a caller opened, or (a worker process) one of its own, kept
-    for the worker's life so every job after the first finds its renderers started."""
-    global _POOL
-    if _POOL is None:
-        _POOL = AdapterPool(collect_adapters())
-        atexit.register(_POOL.close)  # a worker process's renderers end with it
-    for f in renderer_files:
-        _POOL.registry.resolve(f)
-    return _POOL
-
-
-def run_job(job: Job, renderer_files: tuple[str, ...] = (), progress: ProgressFn | None = None) -> Outcome:
-    """Run a job (already resolved once by the caller, so its errors were reported before any
-    render) with this process's adapters."""
+def run_job(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | None = None) -> Outcome:
+    """Run a resolved job (its errors were reported before any render) with these adapters."""
     with _ONE_AT_A_TIME:
-        pool = _pool(tuple(renderer_files))
-        return execute(resolve(job, pool.registry), pool, progress)
+        return execute(resolved, adapters, progress)
+
+
+@functools.lru_cache(maxsize=None)
+def worker_adapters(renderer_files: tuple[str, ...]) -> AdapterPool:
+    """A worker process's adapters (a local pool's, a Dask worker's): opened at its first job and
+    kept for its life, so that every job after the first finds its renderers started; closed when
+    the process ends. Only `run_in_worker` uses them: the process that runs jobs itself passes its
+    own pool."""
+    registry = collect_adapters()
+    for f in renderer_files:  # the renderer definitions the caller loaded from files
+        registry.resolve(f)
+    pool = AdapterPool(registry)
+    atexit.register(pool.close)
+    return pool
+
+
+def run_in_worker(resolved: Resolved, renderer_files: tuple[str, ...] = ()) -> Outcome:
+    """Run a resolved job sent to a worker process, with that process's adapters."""
+    return run_job(resolved, worker_adapters(tuple(renderer_files)))
 
 
 def source_highlight(source: CachedRenderer, resolved: Resolved, scene: ProbeScene) -> float:
@@ -130,8 +136,8 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
     ledger = Ledger()
     src_adapter, tgt_adapter = Metered(adapters[src.adapter], "source", ledger), Metered(adapters[tgt.adapter],
                                                                                           "target", ledger)
-    source = CachedRenderer(src_adapter, src.adapter, src.model, job.scene)
-    target = CachedRenderer(tgt_adapter, tgt.adapter, tgt.model, job.scene)
+    source = CachedRenderer(src_adapter, src.adapter, resolved.source_spec, job.scene)
+    target = CachedRenderer(tgt_adapter, tgt.adapter, resolved.target_spec, job.scene)
     if progress:
         progress("source", 0, float("nan"))
     env_ok = all(LightType.ENVIRONMENT in adapters[n].light_types for n in (src.adapter, tgt.adapter))
@@ -143,25 +149,26 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
                            source_smooth=resolved.source_spec.is_smooth(resolved.source_params),
                            highlight=lambda sc: source_highlight(source, resolved, sc))
     renders = ProbeRenders(source, resolved.source_params, resolved.source_spec, target, fit.scene, given=job.scene,
-                           given_noise=fit.scene_noise, resolve_limit=job.settings.resolve_limit, sharp=fit.sharp)
+                           given_noise=fit.scene_noise, resolve_limit=job.settings.resolve_limit, sharp=fit.sharp,
+                           look=resolved.look)
     informed = job.settings.start == Start.INFORMED and job.lookup is None and job.start is None
     smooth = smooth_held(resolved) if job.lookup is None else {}
-    start = {**(informed_start(resolved, adapters) if informed else given_start(resolved)), **smooth}
+    start = {**(informed_start(resolved) if informed else given_start(resolved)), **smooth}
     free = [p for p in fitted(resolved, start) if p not in smooth] if job.lookup is None else []
     # A textured source is a lookup (nothing fitted): its maps and their check come first, for the verdict.
     with purpose("textured"):
-        texturing = texture_result(resolved, src_adapter, tgt_adapter, dict(resolved.base)) if src.textures else None
+        texturing = resolved.textured(resolved, src_adapter, tgt_adapter, dict(resolved.base)) \
+            if resolved.textured is not None else None
     notes = lookup_notes(job) + (textured_findings(texturing.record, job.settings.threshold,
                                                    job.settings.resolve_limit) if texturing else []) + \
         ([SmoothHeld(held=smooth)] if smooth else [])
     result = remap(resolved.target_spec, {**resolved.base, **start}, free, renders, job.settings, job.tuning,
                    progress, alternatives=alternatives(resolved, start, smooth) if informed else [], notes=notes,
-                   needed=needed(resolved, adapters, start) if free and job.settings.inputs == Inputs.NEEDED else {})
-    files = artifacts(adapters[tgt.adapter], tgt.model, result.params, renders.source_image(), result.target_image,
+                   needed=needed(resolved, start) if free and job.settings.inputs == Inputs.NEEDED else {})
+    files = artifacts(adapters[tgt.adapter], resolved.target_spec, result.params, renders.source_image(), result.target_image,
                       texturing)
     info = describe(adapters, list(dict.fromkeys((src.adapter, tgt.adapter))))
-    derived = (adapters[src.adapter].derived(src.model, resolved.source_params),
-               adapters[tgt.adapter].derived(tgt.model, result.params))
+    derived = (resolved.source_spec.derive(resolved.source_params), resolved.target_spec.derive(result.params))
     report = build_report(resolved, result, start=start, derived=derived, fit_scene=fit,
                           source_renders=renders.source_renders(),
                           renders_by_resolution=target.renders_by_resolution(), seconds=time.perf_counter() - t0,
@@ -172,7 +179,7 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
     return Outcome(report, renders.source_image(), result.target_image, files)
 
 
-def _textured_files(d: Path, adapter: Adapter, model: str, texturing: Texturing) -> list[Path]:
+def _textured_files(d: Path, adapter: Adapter, model: Model, texturing: Texturing) -> list[Path]:
     paths = []
     for name, data in texturing.files.items():
         (d / name).write_bytes(data)
@@ -198,7 +205,7 @@ def lookup_notes(job: Job) -> list:
     return [TableLookup(table=lk.table, method=lk.method, expected_error=lk.expected_error, outside=lk.outside)]
 
 
-def artifacts(adapter: Adapter, model: str, params: dict[str, Value], source: np.ndarray,
+def artifacts(adapter: Adapter, model: Model, params: dict[str, Value], source: np.ndarray,
               target: np.ndarray, texturing: Texturing | None = None) -> dict[str, bytes]:
     """The result's files, by name: linear EXRs, PNG previews, the material in the target's own form
     (made in a temporary folder, where this process runs, and handed over as bytes); a textured
@@ -221,21 +228,20 @@ def artifacts(adapter: Adapter, model: str, params: dict[str, Value], source: np
                           f"{reason} (set TMPDIR to a folder with space)") from None
 
 
-def informed_start(resolved: Resolved, adapters: AdapterPool) -> dict[str, Value]:
+def informed_start(resolved: Resolved) -> dict[str, Value]:
     """The exporters' conversion of the source into the target's fitted parameters (clipped to
     their bounds) and its discrete choices (a distribution the source names, unless held), or {}
     when either adapter has no neutral reading for its model. A value of the wrong shape or not
     finite is left out: the start is a hint, the fit does not need it."""
-    job = resolved.job
-    look = adapters[job.source.adapter].appearance(job.source.model, resolved.source_params)
+    look = resolved.look
     if look is None:
         return {}
-    conv = adapters[job.target.adapter].from_appearance(job.target.model, look, dict(resolved.base))
-    out: dict[str, Value] = {}
     spec = resolved.target_spec
+    conv = spec.from_appearance(look, dict(resolved.base))
+    out: dict[str, Value] = {}
     for p in spec.parameters:
         if (p.kind == ParamKind.CHOICE and p.name not in resolved.fixed and conv.get(p.name) in p.choices
-                and _named(adapters[job.target.adapter], job.target.model, look, resolved.base, p, conv[p.name])):
+                and _named(spec, look, resolved.base, p, conv[p.name])):
             out[p.name] = conv[p.name]
     # Held ones too (the source's coat tint is rendered, not fitted), where the choices make them count.
     chosen = {**resolved.base, **out}
@@ -277,12 +283,11 @@ def fitted(resolved: Resolved, start: dict[str, Value]) -> list[str]:
                    and spec.is_active(p.name, params) and not spec.is_inert(p.name, params)]
 
 
-def needed(resolved: Resolved, adapters: AdapterPool, start: dict[str, Value]) -> dict[str, str]:
+def needed(resolved: Resolved, start: dict[str, Value]) -> dict[str, str]:
     """The target's held inputs that the source's reading needs (`Appearance.needs` against
     `ParamSpec.fit_for`), each with why: those the user did not fix, that mean something and can
     change the image with the start's values. {} without a reading."""
-    job = resolved.job
-    look = adapters[job.source.adapter].appearance(job.source.model, resolved.source_params)
+    look = resolved.look
     if look is None:
         return {}
     has, spec, params = look.needs(), resolved.target_spec, {**resolved.base, **start}
@@ -291,7 +296,7 @@ def needed(resolved: Resolved, adapters: AdapterPool, start: dict[str, Value]) -
             and not spec.is_inert(p.name, params)}
 
 
-def _named(adapter, model: str, look, base: dict[str, Value], p, value: Value) -> bool:
+def _named(model: Model, look, base: dict[str, Value], p, value: Value) -> bool:
     """Whether the reading names this choice: it differs from the base, or it stays when the base
     holds another value (a source's GGX where GGX is also the default is named all the same)."""
     if value != base[p.name]:
@@ -299,7 +304,7 @@ def _named(adapter, model: str, look, base: dict[str, Value], p, value: Value) -
     other = next((c for c in p.choices if c != value), None)
     if other is None:
         return False
-    return adapter.from_appearance(model, look, {**base, p.name: other}).get(p.name) == value
+    return model.from_appearance(look, {**base, p.name: other}).get(p.name) == value
 
 
 def alternatives(resolved: Resolved, start: dict[str, Value],

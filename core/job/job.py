@@ -8,6 +8,7 @@ result: the same key means the same result, so a stored one can be reused."""
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 from dataclasses import dataclass
@@ -18,7 +19,10 @@ from pydantic import Field
 from ..data.errors import ConfigError
 from ..data.model import Strict
 from ..data.scene import MAX_SPP, ProbeScene
+from ..data.appearance import Appearance
 from ..data.schemas import Material, ModelSpec, ParamKind, Value
+from ..host.model import Model
+from .texturing import TexturedStep
 from ..data.settings import Settings
 from ..engine.tuning import ENGINE_VERSION, Tuning
 from ..host.plugins import AdapterRegistry
@@ -118,16 +122,25 @@ class Resolved:
     """A validated job in canonical form, and what the engine needs of it."""
 
     job: Job
-    source_spec: ModelSpec
-    target_spec: ModelSpec
+    source_spec: Model
+    target_spec: Model
     source_params: dict[str, Value]
     base: dict[str, Value]
     """The target's complete parameters before the fit: defaults, carried choices, fixed values."""
     free: list[str]
     fixed: dict[str, Value]
+    textured: TexturedStep | None = None
+    """A textured source's remap texel by texel and its check (`core.textured.texture_result`), given
+    by whoever resolved the job; None for a uniform one."""
+
+    @functools.cached_property
+    def look(self) -> Appearance | None:
+        """The source read in renderer-neutral terms (`Model.appearance`), read once for the job: its
+        informed start, the inputs it needs, its reference for the renderers' floor."""
+        return self.source_spec.appearance(self.source_params)
 
 
-def model_of(registry: AdapterRegistry, adapter: str, model: str, file: str | None, prefix: str) -> ModelSpec:
+def model_of(registry: AdapterRegistry, adapter: str, model: str, file: str | None, prefix: str) -> Model:
     entry = registry.get(adapter, file=file, field_name=f"{prefix}adapter")
     if not entry.models and entry.unavailable_reason():
         raise ConfigError(f"adapter {adapter!r} is unavailable: {entry.unavailable_reason()}", file=file,
@@ -139,15 +152,22 @@ def model_of(registry: AdapterRegistry, adapter: str, model: str, file: str | No
     return entry.models[model]
 
 
-def resolve(job: Job, registry: AdapterRegistry, where: Where = Where()) -> Resolved:
+def resolve(job: Job, registry: AdapterRegistry, where: Where = Where(),
+            textured: TexturedStep | None = None) -> Resolved:
     """Check everything before any render: adapters, models, parameters, bounds. Adapters are
-    named, never given as files here: a data file must not choose a program to run."""
+    named, never given as files here: a data file must not choose a program to run. A textured
+    source's job is a table's lookup, and ``textured`` its remap texel by texel
+    (`core.textured.texture_result`, from the rooms above that know tables)."""
     src = job.source
     src_spec = model_of(registry, src.adapter, src.model, where.source_file, where.source_prefix)
     if src.textures and job.lookup is None:
         raise ConfigError(f"drives {', '.join(sorted(src.textures))} by images: a fit remaps one uniform material; "
                           "remap a textured one texel by texel through a table (--table TABLE, built with `remap "
                           "table build`)", file=where.source_file, field="textures")
+    if src.textures and textured is None:
+        raise ConfigError("drives its inputs by images, and this command remaps uniform materials only: convert it "
+                          "with `remap convert --table TABLE` or `remap --table TABLE`", file=where.source_file,
+                          field="textures")
     settled = src_spec.settle(src.params, file=where.source_file, prefix=where.params_prefix)
     src_params = src_spec.complete(settled, file=where.source_file, prefix=where.params_prefix)
     tgt = job.target
@@ -184,7 +204,8 @@ def resolve(job: Job, registry: AdapterRegistry, where: Where = Where()) -> Reso
             {k: base[k] for k in job.lookup.params})}),
         "start": start,
     })
-    return Resolved(canonical, src_spec, tgt_spec, src_params, base, free, fixed)
+    return Resolved(canonical, src_spec, tgt_spec, src_params, base, free, fixed,
+                    textured if src.textures else None)
 
 
 def _check_fixed(spec: ModelSpec, base: dict[str, Value], fixed: dict[str, Value], where: Where) -> None:

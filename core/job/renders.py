@@ -12,9 +12,11 @@ from typing import Any
 import numpy as np
 
 from ..data.account import purpose
+from ..data.appearance import Appearance
 from ..data.metrics import relative_rmse
 from ..data.scene import Lighting, ProbeScene
-from ..data.schemas import Lobe, ModelSpec, Value
+from ..data.schemas import Lobe, Value
+from ..host.model import Model
 from ..engine.levels import Level
 from ..engine.results import Agreement, Validation
 from ..engine.schedule import highlight_pixels
@@ -45,14 +47,14 @@ def _first_view(scene: ProbeScene) -> str:
 class CachedRenderer:
     """One adapter's model, rendered through a cache; ``cache.misses`` counts real renders."""
 
-    def __init__(self, adapter: Adapter, name: str, model: str, scene: ProbeScene):
+    def __init__(self, adapter: Adapter, name: str, model: Model, scene: ProbeScene):
         self.adapter, self.name, self.model, self.scene = adapter, name, model, scene
         self.cache = RenderCache()
         self.by_resolution: collections.Counter[tuple[int, int]] = collections.Counter()  # (resolution, spp)
-        self.who = f"adapter {name!r} model {model!r}"
+        self.who = f"adapter {name!r} model {model.name!r}"
 
     def _key(self, params: dict[str, Value], lobe: str | None, scene: ProbeScene) -> str:
-        return render_key(self.name, self.model, rounded(params), scene.cache_key(), lobe)
+        return render_key(self.name, self.model.name, rounded(params), scene.cache_key(), lobe)
 
     def __call__(self, params: dict[str, Value], lobe: str | None = None, scene: ProbeScene | None = None):
         sc = scene or self.scene
@@ -108,10 +110,14 @@ class _AtScene:
 class ProbeRenders:
     """`core.engine.Renders` for a source material and a target model."""
 
-    def __init__(self, source: CachedRenderer, source_params: dict[str, Value], source_spec: ModelSpec,
+    def __init__(self, source: CachedRenderer, source_params: dict[str, Value], source_spec: Model,
                  target: CachedRenderer, scene: ProbeScene, given: ProbeScene | None = None,
-                 given_noise: float = 0.0, resolve_limit: float | None = None, sharp: bool = False):
+                 given_noise: float = 0.0, resolve_limit: float | None = None, sharp: bool = False,
+                 look: Appearance | None = None):
         self.source, self.source_params, self.source_spec = source, dict(source_params), source_spec
+        self.look = look if look is not None or source_spec is None else source_spec.appearance(self.source_params)
+        """The source's neutral reading (`Resolved.look`): which reference material the renderers' floor
+        is measured on."""
         self.target, self.scene = target, scene
         self.job_scene = given if given is not None else scene
         """The job's scene: the held-out lights take its camera, size and samples."""
@@ -203,16 +209,16 @@ class ProbeRenders:
 
     def agreement(self, params: dict[str, Value], validation: Validation, threshold: float, judged) -> Agreement:
         transmissive = self.source_spec.transmissive(self.source_params) or \
-            self.target.adapter.models[self.target.model].transmissive(params)
+            self.target.model.transmissive(params)
         first = self.scene.view_scenes()[0]  # adapters render one view at a time
         fit = (first.with_(seed=first.seed + 2), first.with_(seed=first.seed + 3))
         conditions = [(Lighting.SCENE, "fit scene", fit)] + [
             (c.condition, c.label, validation.scenes[c.condition]) for c in validation.checks]
-        kind = reference_kind(self.source.adapter.appearance(self.source.model, self.source_params))
+        kind = reference_kind(self.look)
         return agreement(self.source.adapter, self.target.adapter, transmissive, conditions, threshold, judged, kind)
 
     def notes(self, params: dict[str, Value]) -> list[str]:
-        return list(self.target.adapter.notes(self.target.model, params))
+        return list(self.target.model.notes(params))
 
     def target_renders(self) -> int:
         return self.target.cache.misses

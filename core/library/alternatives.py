@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 from ..data.appearance import Appearance
 from ..data.errors import RemapError
 from ..data.schemas import ModelSpec, Need
+from ..host.model import Model
 from ..host.protocol import ModelChoice
 from ..run.runner import Done, Task
 from .records import ItemStatus
@@ -92,32 +93,32 @@ _FEATURES = (("coat", lambda a: a.coat is not None), ("sheen", lambda a: a.sheen
              ("anisotropy", lambda a: a.anisotropy > 0.0), ("transmission", lambda a: a.transmission > 0.0))
 
 
-def dropped(look: Appearance, adapter, model: str, spec: ModelSpec) -> list[str]:
+def dropped(look: Appearance, spec: Model) -> list[str]:
     """What of the reading the model drops, by the adapter's own readings: the reading converted to
     the model's parameters (`from_appearance`) and read back (`appearance`) has no coat, sheen,
     anisotropy or transmission where the source has one, or another diffuse lobe."""
     try:
-        back = adapter.appearance(model, spec.complete(adapter.from_appearance(model, look, spec.complete({}))))
+        back = spec.appearance(spec.complete(spec.from_appearance(look, spec.complete({}))))
     except (RemapError, ValueError):  # a conversion out of the model's bounds: nothing to say from it
         return []
     if back is None:
         return []
-    out = [f"its {name} ({model} has none)" for name, has in _FEATURES if has(look) and not has(back)]
+    out = [f"its {name} ({spec.name} has none)" for name, has in _FEATURES if has(look) and not has(back)]
     if look.diffuse_model != back.diffuse_model and max(look.diffuse) > 0.0:
-        out.append(f"its {look.diffuse_model.value} diffuse ({model}'s is {back.diffuse_model.value})")
+        out.append(f"its {look.diffuse_model.value} diffuse ({spec.name}'s is {back.diffuse_model.value})")
     return out
 
 
-def advise(item: Item, spec: ModelSpec, adapter) -> None:
+def advise(item: Item, spec: Model, adapter: str) -> None:
     """Say, for a kept result still a mismatch or unreliable, what would do better: what the chosen model
     lacks by the reading (`lacks`, `dropped`), else that no other model of the adapter was offered."""
     if item.look is None or item.status not in RETRY:
         return
-    missing = lacks(item.look, spec) + dropped(item.look, adapter, item.model, spec)
+    missing = lacks(item.look, spec) + dropped(item.look, spec)
     if missing:
         item.why = f"{item.why}; what {spec.name} lacks for it: {'; '.join(dict.fromkeys(missing))}"
     elif len(item.tried) < 2:
-        item.why = f"{item.why}; no other model of {adapter.name} is offered for it: the closest {spec.name} gets"
+        item.why = f"{item.why}; no other model of {adapter} is offered for it: the closest {spec.name} gets"
 
 
 def keep_best(item: Item) -> None:

@@ -28,6 +28,7 @@ from ..run.runner import Done, Runner, Task
 from ..run.store import Store, owned
 from ..tables import Table, TableMap
 from ..tables.lookup import Answer
+from ..textured import texture_result
 from .alternatives import Tried, advise, keep_best, retries
 from .formats import Converted, Entry, Formats
 from .records import ConvertSummary, ItemStatus, MaterialRow, TriedModel
@@ -82,14 +83,16 @@ class Item:
         return self.entry.problem or self.failure or (self.done.error if self.done is not None else "")
 
 
-@dataclass
+@dataclass(frozen=True)
 class Conversion:
+    """A library's conversion, built once every material is done and its libraries are written."""
+
     items: list[Item]
     destination: Destination
-    libraries: list[Path] = field(default_factory=list)
-    library_notes: list[str] = field(default_factory=list)
-    seconds: float = 0.0
-    where: str = ""
+    libraries: list[Path]
+    library_notes: list[str]
+    seconds: float
+    where: str
 
     @property
     def failed(self) -> list[Item]:
@@ -159,7 +162,7 @@ def _through_table(item: Item, dest: Destination, registry: AdapterRegistry, sce
                            for u, a in answers if u is not use)
         item.why += (f" (its fits reach {_pct(answer.lookup.expected_error)} at the textures' mean, under the "
                      f"probe light; the other tables': {others})")
-    item.task = Task(item.slot, resolve(job, registry, where).job, e.name)
+    item.task = Task(item.slot, resolve(job, registry, where, textured=texture_result), e.name)
     return True
 
 
@@ -211,8 +214,8 @@ def _prepare(item: Item, dest: Destination, registry: AdapterRegistry, adapters:
             item.model, item.why = src.model, "its own model (the source is already this adapter's)"
         _task(item, dest, fix, registry, scene, settings)
         return
-    item.look = adapters[src.adapter].appearance(src.model, registry.get(src.adapter).models[src.model].complete(
-        src.params, file=e.file, prefix=f"{e.name}: params"))
+    model = registry.get(src.adapter).models[src.model]
+    item.look = model.appearance(model.complete(src.params, file=e.file, prefix=f"{e.name}: params"))
     if dest.model is None:
         choice = adapters[dest.adapter].model_for(item.look) if item.look is not None else None
         if choice is None:
@@ -236,7 +239,7 @@ def model_task(item: Item, slot: str, adapter: str, model: str, fix: dict, title
     job = Job(source=e.material, target=Target(adapter=adapter, model=model, fix=fix), scene=scene,
               settings=settings, label=f"{e.file}: {e.name}")
     where = Where(source_file=e.file, params_prefix=f"{e.name}: params", target_file=None, target_prefix="--to ")
-    return Task(slot, resolve(job, registry, where).job, title)
+    return Task(slot, resolve(job, registry, where), title)
 
 
 def convert(entries: list[Entry], dest: Destination, out: str | Path, registry: AdapterRegistry, formats: Formats,
@@ -248,7 +251,7 @@ def convert(entries: list[Entry], dest: Destination, out: str | Path, registry: 
     items = plan(entries, dest, registry, adapters, scene, settings, tables)
     with owned(out) as folder:
         runnable = [i for i in items if i.task is not None]
-        runner = Runner(Store(folder / "materials"), workers, renderer_files=tuple(registry.loaded_files()),
+        runner = Runner(Store(folder / "materials"), workers, adapters,
                         quiet=quiet, stop_on_error=False, line=_line)
         for item, done in zip(runnable, runner.run([i.task for i in runnable])):
             item.done = done
@@ -262,10 +265,9 @@ def convert(entries: list[Entry], dest: Destination, out: str | Path, registry: 
             for item in {id(i): i for i, _, _ in second}.values():
                 keep_best(item)
         for item in runnable:
-            advise(item, registry.get(dest.adapter).models[item.model], adapters[dest.adapter])
-        result = Conversion(items, dest, where=workers.where)
-        _write_libraries(result, folder, formats)
-        result.seconds = time.perf_counter() - t0
+            advise(item, registry.get(dest.adapter).models[item.model], dest.adapter)
+        libraries, notes = _write_libraries(items, dest, folder, formats)
+        result = Conversion(items, dest, libraries, notes, time.perf_counter() - t0, workers.where)
         write_json_atomic(folder / "convert.json", summary(result).model_dump(mode="json"))
         write_index(folder / "index.html", result)
     return result
@@ -291,24 +293,27 @@ def _converted(item: Item, folder: Path) -> Converted:
     return Converted(item.entry.name, item.model, dict(report.textures.values), here, maps, files)
 
 
-def _write_libraries(result: Conversion, folder: Path, formats: Formats) -> None:
-    ok = [i for i in result.items if i.done is not None and i.done.report is not None]
+def _write_libraries(items: list[Item], dest: Destination, folder: Path,
+                     formats: Formats) -> tuple[list[Path], list[str]]:
+    """The libraries the target's writers make of the converted materials, and what was left out, why."""
+    ok = [i for i in items if i.done is not None and i.done.report is not None]
     models = {i.model for i in ok}
-    writers = formats.writers_for(result.destination.adapter, models) or [NativeFiles(result.destination.adapter)]
-    converted = {}
+    writers = formats.writers_for(dest.adapter, models) or [NativeFiles(dest.adapter)]
+    converted, libraries, notes = {}, [], []
     for i in ok:
         try:
             converted[i.slot] = _converted(i, folder)
         except RemapError as exc:  # its maps could not be gathered: the others are written all the same
-            result.library_notes.append(f"{i.entry.name}: left out of the libraries: {exc}")
+            notes.append(f"{i.entry.name}: left out of the libraries: {exc}")
     for writer in writers:
         mine = [converted[i.slot] for i in ok if i.slot in converted and (not writer.models or i.model in writer.models)]
         if not mine:
             continue
         try:
-            result.libraries += writer.write(folder, mine)
+            libraries += writer.write(folder, mine)
         except RemapError as exc:
-            result.library_notes.append(f"{writer.name}: not written: {exc}")
+            notes.append(f"{writer.name}: not written: {exc}")
+    return libraries, notes
 
 
 @dataclass

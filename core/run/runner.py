@@ -15,8 +15,8 @@ from typing import Callable
 
 from ..data.errors import ConfigError, RemapError, RenderError
 from ..engine import ProgressFn
-from ..job.execute import run_job
-from ..job.job import Job
+from ..job.execute import AdapterPool, run_in_worker, run_job
+from ..job.job import Job, Resolved
 from ..job.report import Report, for_job
 from . import interrupt
 from .executors import Workers, worker_deaths
@@ -27,9 +27,14 @@ from .store import Store
 class Task:
     slot: str
     """The job's folder in the store."""
-    job: Job
-    """Canonical (resolved) already: its errors were reported before any render."""
+    resolved: Resolved
+    """The job, resolved once (`core.job.job.resolve`): its errors were reported before any render,
+    and the models it names are in it."""
     title: str = ""
+
+    @property
+    def job(self) -> Job:
+        return self.resolved.job
 
 
 @dataclass(frozen=True)
@@ -50,13 +55,16 @@ _Todo = tuple[int, Task, str]
 
 
 class Runner:
-    def __init__(self, store: Store, workers: Workers, *, renderer_files: tuple[str, ...] = (),
+    def __init__(self, store: Store, workers: Workers, adapters: AdapterPool, *,
                  line: LineFn | None = None, quiet: bool = False, render_progress: ProgressFn | None = None,
                  reuse: bool = True, stop_on_error: bool = True):
-        """``render_progress``: per-render progress of a job run in this process. ``reuse``: take
-        a stored result of the same job instead of running it. ``stop_on_error``: a job that fails
-        (a renderer error) stops the run; else its `Done` says why and the others go on."""
-        self.store, self.workers, self.renderer_files = store, workers, tuple(renderer_files)
+        """``adapters``: this process's, for jobs run here (a worker process opens its own, from the
+        same renderer definitions). ``render_progress``: per-render progress of a job run in this
+        process. ``reuse``: take a stored result of the same job instead of running it.
+        ``stop_on_error``: a job that fails (a renderer error) stops the run; else its `Done` says
+        why and the others go on."""
+        self.store, self.workers, self.adapters = store, workers, adapters
+        self.renderer_files = tuple(adapters.registry.loaded_files())
         self.line, self.quiet, self.render_progress, self.reuse = line, quiet, render_progress, reuse
         self.stop_on_error = stop_on_error
 
@@ -124,8 +132,8 @@ class Runner:
 
     def _submit(self, t: Task) -> cf.Future:
         if self.workers.in_process:
-            return self.workers.executor.submit(run_job, t.job, self.renderer_files, self.render_progress)
-        return self.workers.executor.submit(run_job, t.job, self.renderer_files)
+            return self.workers.executor.submit(run_job, t.resolved, self.adapters, self.render_progress)
+        return self.workers.executor.submit(run_in_worker, t.resolved, self.renderer_files)
 
     def _collect(self, fut: cf.Future, todo: _Todo, twins: list[_Todo]) -> list[tuple[int, Done, RemapError | None]]:
         """The finished job's Done, and its twins': each stored in its own slot under its own labels

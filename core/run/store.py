@@ -146,25 +146,26 @@ class Store:
         try:
             folder.mkdir(parents=True, exist_ok=True)
             _tidy(folder)
-            if (folder / RESULT).exists() and not _ours(folder / RESULT):
+            ours, previous = _previous(folder / RESULT)  # read once: whose it is, and what it lists
+            if not ours:
                 raise ConfigError(f"holds a {RESULT} that brdf-remap did not write: not replaced (choose another "
                                   "folder)", file=str(folder))
             staging = Path(tempfile.mkdtemp(prefix=STAGING, dir=folder))
         except OSError as exc:
             raise ConfigError(f"cannot write: {why(exc)}", file=str(folder)) from None
         try:
-            return self._swap_in(folder, staging, outcome)
+            return self._swap_in(folder, staging, outcome, previous)
         finally:
             shutil.rmtree(staging, ignore_errors=True)
 
-    def _swap_in(self, folder: Path, staging: Path, outcome: Outcome) -> list[Path]:
+    def _swap_in(self, folder: Path, staging: Path, outcome: Outcome, previous: dict | None) -> list[Path]:
         doc = json.dumps(outcome.report.document(), indent=2, ensure_ascii=False) + "\n"
         for name, data in [*outcome.files.items(), (RESULT, doc.encode())]:
             _write(staging / name, data, folder / name)
         moving = folder
         try:
             backup = Path(tempfile.mkdtemp(prefix=BACKUP, dir=folder))
-            for name in [RESULT, *sorted(_listed_files(folder))]:
+            for name in [RESULT, *sorted(_listed_files(folder, previous))]:
                 if (folder / name).is_file():
                     os.replace(folder / name, backup / name)  # the previous result, aside, whole
             for name in [*outcome.files, RESULT]:
@@ -188,27 +189,30 @@ def _write(path: Path, data: bytes, shown: Path) -> None:
                           file=str(shown)) from None
 
 
-def _ours(path: Path) -> bool:
-    """Whether a result.json was written by brdf-remap (this format, or the one before it)."""
+def _previous(path: Path) -> tuple[bool, dict | None]:
+    """Whether the result.json there (if any) was written by brdf-remap (this format, or the one
+    before it), and its document where it was and could be read."""
     try:
         doc = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        return True, None
     except (OSError, ValueError):
-        return True  # unreadable or half-written: ours to replace (nothing else writes this name here)
+        return True, None  # unreadable or half-written: ours to replace (nothing else writes this name here)
     if not isinstance(doc, dict):
-        return False
+        return False, None
     tool = doc.get("tool")
-    return (isinstance(tool, str) and tool.split(" ", 1)[0] == "brdf-remap") or {"engine", "metrics", "options"} <= set(doc)
+    ours = (isinstance(tool, str) and tool.split(" ", 1)[0] == "brdf-remap") or {"engine", "metrics", "options"} <= set(doc)
+    return ours, doc if ours else None
 
 
-def _listed_files(folder: Path) -> set[str]:
-    """The files the previous brdf-remap result owns beside its result.json: those it lists with
-    their hash, and only while they still have it. A listed name alone proves nothing (a
-    result.json can be written by anyone): a file that is not byte for byte what brdf-remap
-    wrote is never moved aside, hence never deleted."""
-    if not (folder / RESULT).exists() or not _ours(folder / RESULT):
+def _listed_files(folder: Path, doc: dict | None) -> set[str]:
+    """The files the previous brdf-remap result (its document ``doc``) owns beside its result.json:
+    those it lists with their hash, and only while they still have it. A listed name alone proves
+    nothing (a result.json can be written by anyone): a file that is not byte for byte what
+    brdf-remap wrote is never moved aside, hence never deleted."""
+    if doc is None:
         return set()
     try:
-        doc = json.loads((folder / RESULT).read_text(encoding="utf-8"))
         records = [(f["name"], f["sha256"], f["bytes"]) for f in doc.get("files", []) if isinstance(f, dict)]
     except (OSError, ValueError, TypeError, KeyError, AttributeError):
         return set()

@@ -26,6 +26,7 @@ from ..data.errors import ConfigError
 from ..data.settings import Validation
 from ..host.plugins import AdapterRegistry
 from ..job.job import Lookup
+from ..job.execute import AdapterPool
 from ..run.executors import Workers
 from ..run.runner import Done, Runner
 from ..run.store import Store, owned
@@ -137,15 +138,14 @@ class Fits:
     first: Any
 
 
-def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRegistry, workers: Workers, *,
-                quiet: bool = False) -> Table:
+def build_table(spec: TableSpec, file: str, out: str | Path, registry: AdapterRegistry, workers: Workers,
+                adapters: AdapterPool, *, quiet: bool = False) -> Table:
     t0 = time.perf_counter()
     p = plan(spec, file, registry)
     scene = spec.scene.scene(Path(file).resolve().parent)
     first = first_tasks(p, registry, scene)  # a job the spec cannot make is said before the folder is taken
     with owned(out) as folder:
-        runner = Runner(Store(folder), workers, renderer_files=tuple(registry.loaded_files()), quiet=quiet,
-                        stop_on_error=False, line=_line)
+        runner = Runner(Store(folder), workers, adapters, quiet=quiet, stop_on_error=False, line=_line)
         fits = fit_points(p, registry, runner, scene, first)
 
         def draft(parts: Parts) -> Table:

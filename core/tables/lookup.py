@@ -115,21 +115,19 @@ def write_answer(folder, resolved, answer: Answer, adapter, table_file: str) -> 
     from .. import __version__
     from ..data.atomic import why, write_bytes_atomic, write_json_atomic
 
-    from ..job.texturing import texture_result
-
     job, spec = resolved.job, resolved.target_spec
     params = spec.active(resolved.base)
-    texturing = texture_result(resolved, None, adapter, dict(resolved.base)) if job.source.textures else None
+    texturing = resolved.textured(resolved, None, adapter, dict(resolved.base)) if resolved.textured else None
     try:
         with tempfile.TemporaryDirectory(prefix="brdfremap-") as tmp:
             files = []
             if texturing is None:
-                made = [Path(p) for p in adapter.write_native(job.target.model, dict(resolved.base), Path(tmp))]
+                made = [Path(p) for p in adapter.write_native(spec, dict(resolved.base), Path(tmp))]
             else:
                 for name, data in texturing.files.items():
                     (Path(tmp) / name).write_bytes(data)
                 made = [Path(tmp) / n for n in texturing.files] + [Path(p) for p in adapter.write_native(
-                    job.target.model, texturing.params, Path(tmp), textures=texturing.native)]
+                    spec, texturing.params, Path(tmp), textures=texturing.native)]
                 params = spec.active(texturing.params)
             files = [write_bytes_atomic(Path(folder) / p.name, p.read_bytes()) for p in made]
     except OSError as exc:

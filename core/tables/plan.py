@@ -101,7 +101,7 @@ def point_task(p: Plan, registry: AdapterRegistry, slot: str, values: dict, titl
               label=f"{p.file} {slot}", lookup=lookup, start=start)
     where = Where(source_file=p.file, source_prefix="source.", params_prefix=f"{slot} ({shown(values)})",
                   target_file=p.file, target_prefix="target.", fix_prefix="target.fix", command_line=False)
-    return Task(slot, resolve(job, registry, where).job, title)
+    return Task(slot, resolve(job, registry, where), title)
 
 
 def shown(values: dict) -> str:

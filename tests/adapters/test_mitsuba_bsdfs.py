@@ -63,15 +63,15 @@ def test_trimmed_reflectance_above_one_renders_the_same(mitsuba_adapter):
     b = mitsuba_adapter.render("ward", spec.complete({"specular_reflectance": [1.8, 1.5, 1.2],
                                                       "diffuse_reflectance": 0.0}), scene)
     assert relative_rmse(a, b) < 1e-6
-    notes = mitsuba_adapter.notes("ward", spec.complete({"specular_reflectance": 1.2, "diffuse_reflectance": 0.0}))
+    notes = spec.notes(spec.complete({"specular_reflectance": 1.2, "diffuse_reflectance": 0.0}))
     assert notes and "0.825" in notes[0]
-    assert mitsuba_adapter.notes("ward", spec.complete({})) == []
+    assert spec.notes(spec.complete({})) == []
 
 
 def test_as_conductor_preset_equals_its_reflectivity_and_edge_tint(mitsuba_adapter):
     spec, scene = mitsuba_adapter.models["ashikhmin_shirley"], ProbeScene(resolution=48)
     preset = spec.complete({"material": "Cu", "alpha": 0.15})
-    d = mitsuba_adapter.derived("ashikhmin_shirley", preset)
+    d = spec.derive(preset)
     artist = spec.complete({"material": "reflectivity", "alpha": 0.15, "reflectivity": list(d["reflectivity"]),
                             "edge_tint": list(np.clip(d["edge_tint"], 0, 1))})
     assert relative_rmse(mitsuba_adapter.render("ashikhmin_shirley", preset, scene),

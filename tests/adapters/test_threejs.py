@@ -273,8 +273,8 @@ def test_an_anisotropic_metal_renders_as_in_cycles_through_the_appearance(three,
     cp = cycles_adapter.models["principled"].complete({"base_color": 0.9, "metallic": 1.0, "roughness": 0.4,
                                                        "anisotropic": anisotropic,
                                                        "anisotropic_rotation": rotation})
-    tp = three.models["gltf_pbr"].complete(three.from_appearance("gltf_pbr",
-                                                                 cycles_adapter.appearance("principled", cp), {}))
+    gltf = three.models["gltf_pbr"]
+    tp = gltf.complete(gltf.from_appearance(cycles_adapter.models["principled"].appearance(cp), {}))
     assert tp["anisotropy"] > 0.3 and tp["anisotropy_rotation"] == pytest.approx(rotation)
     assert relative_rmse(cycles_adapter.render("principled", cp, scene), three.render("gltf_pbr", tp, scene)) < 0.05
 

@@ -81,6 +81,6 @@ def test_what_a_model_drops_of_the_reading_is_read_back_through_the_adapter(mits
     coated = PLASTIC.model_copy(update={"distribution": "ggx", "coat": Coat(weight=1.0, alpha=0.01),
                                         "sheen": Sheen(weight=0.5)})
     models = mitsuba_adapter.models
-    assert dropped(coated, mitsuba_adapter, "roughplastic", models["roughplastic"]) == [
+    assert dropped(coated, models["roughplastic"]) == [
         "its coat (roughplastic has none)", "its sheen (roughplastic has none)"]
-    assert not [d for d in dropped(coated, mitsuba_adapter, "principled", models["principled"]) if "coat" in d]
+    assert not [d for d in dropped(coated, models["principled"]) if "coat" in d]

@@ -6,8 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from brdfremap.adapters.cycles import appearance as cycles
-from brdfremap.adapters.mitsuba import appearance as mitsuba
+from brdfremap.adapters.mitsuba.model import EXT_IOR
 from brdfremap.adapters.cycles.models import MODELS as CYCLES
 from brdfremap.adapters.mitsuba.models import MODELS as MITSUBA
 from brdfremap.core.data.appearance import (
@@ -41,16 +40,16 @@ def test_fresnel_helpers_invert_each_other():
 
 def test_mitsuba_gold_reads_as_a_conductor_and_writes_principled_by_the_exporters_rule():
     src = MITSUBA["roughconductor"].complete({"material": "none", "eta": GOLD[0], "k": GOLD[1], "alpha": 0.1})
-    look = mitsuba.appearance("roughconductor", src, preset=lambda name: pytest.fail("no preset asked"))
+    look = MITSUBA["roughconductor"].appearance(src)  # eta and k given: no preset is asked of Mitsuba
     assert look.kind == "conductor" and look.alpha == 0.1 and look.distribution == "beckmann"
     assert look.specular == pytest.approx(conductor_f0(*GOLD))
-    out = cycles.from_appearance("principled", look, CYCLES["principled"].complete({}))
+    out = CYCLES["principled"].from_appearance(look, CYCLES["principled"].complete({}))
     # Its edge too: Principled's Specular Tint is a metal's F82 tint, which a complex IOR gives.
     assert out == {"roughness": pytest.approx(math.sqrt(0.1)), "base_color": look.specular, "metallic": 1.0,
                    "specular_tint": look.edge_tint()}
     # Cycles' own conductor takes the complex IOR itself, and the source's Beckmann (Principled has none:
     # the fit tries its two GGX kinds, see test_an_open_distribution_is_tried_each_way).
-    assert cycles.from_appearance("metallic", look, {}) == {"roughness": pytest.approx(math.sqrt(0.1)),
+    assert CYCLES["metallic"].from_appearance(look, {}) == {"roughness": pytest.approx(math.sqrt(0.1)),
                                                            "ior": GOLD[0], "extinction": GOLD[1],
                                                            "distribution": "beckmann"}
 
@@ -59,15 +58,15 @@ def test_a_plastic_keeps_its_reflectance_through_specular_ior_level():
     """Principled's IOR is not fitted (1.5): a plastic of IOR 1.3 reaches its lower F0 through
     Specular IOR Level (0.5 is the IOR as given, F0 scales with twice the level)."""
     src = MITSUBA["roughplastic"].complete({"diffuse_reflectance": (0.6, 0.1, 0.05), "alpha": 0.2, "int_ior": 1.3})
-    look = mitsuba.appearance("roughplastic", src, preset=None)
+    look = MITSUBA["roughplastic"].appearance(src)
     assert look.kind == "dielectric" and look.diffuse == (0.6, 0.1, 0.05)
-    out = cycles.from_appearance("principled", look, CYCLES["principled"].complete({}))
+    out = CYCLES["principled"].from_appearance(look, CYCLES["principled"].complete({}))
     assert out["metallic"] == 0.0 and out["base_color"] == (0.6, 0.1, 0.05)
-    assert 2 * out["specular_ior_level"] * dielectric_f0(1.5) == pytest.approx(dielectric_f0(1.3 / mitsuba.EXT_IOR))
+    assert 2 * out["specular_ior_level"] * dielectric_f0(1.5) == pytest.approx(dielectric_f0(1.3 / EXT_IOR))
     # And back: Cycles' reading of that Principled BSDF is the plastic again.
-    back = cycles.appearance("principled", CYCLES["principled"].complete(out))
-    assert back.ior == pytest.approx(1.3 / mitsuba.EXT_IOR) and back.alpha == pytest.approx(0.2)
-    again = mitsuba.from_appearance("roughplastic", back)
+    back = CYCLES["principled"].appearance(CYCLES["principled"].complete(out))
+    assert back.ior == pytest.approx(1.3 / EXT_IOR) and back.alpha == pytest.approx(0.2)
+    again = MITSUBA["roughplastic"].from_appearance(back, {})
     assert again["int_ior"] == pytest.approx(1.3) and again["alpha"] == pytest.approx(0.2)
 
 
@@ -77,15 +76,19 @@ def test_a_plastic_keeps_its_reflectance_through_specular_ior_level():
 ])
 def test_the_paper_models_carry_phongs_exponent_rule(model, params):
     """n = 2/α² − 2 both ways (α 0.1 ↔ n 198 would be wrong: n 98 ↔ α = √(2/100))."""
-    look = mitsuba.appearance(model, MITSUBA[model].complete(params), preset=None)
+    look = MITSUBA[model].appearance(MITSUBA[model].complete(params))
     assert look.alpha == pytest.approx(0.1 if model == "ward" else math.sqrt(2 / 100))
     assert look.kind == ("conductor" if model == "phong" else "dielectric")
-    assert mitsuba.from_appearance("phong", Appearance(kind="conductor", alpha=0.1))["exponent"] == pytest.approx(198)
+    assert MITSUBA["phong"].from_appearance(Appearance(kind="conductor", alpha=0.1), {})["exponent"] == pytest.approx(198)
 
 
 def test_a_model_without_a_reading_gives_none_and_no_conversion():
-    assert mitsuba.appearance("nonesuch", {}, preset=None) is None
-    assert cycles.from_appearance("nonesuch", Appearance(kind="conductor", alpha=0.1), {}) == {}
+    from brdfremap.core.host.model import Model
+    from brdfremap.core.data.schemas import ParamSpec
+
+    plain = Model(name="plain", parameters=(ParamSpec(name="c", kind="rgb", default=(0.5, 0.5, 0.5)),))
+    assert plain.appearance(plain.complete({})) is None
+    assert plain.from_appearance(Appearance(kind="conductor", alpha=0.1), {}) == {}
 
 
 def _toy_registry():
@@ -98,22 +101,22 @@ def _job(reg, src, scene, fix=None, **settings):
     return resolve(job, reg)
 
 
-def test_the_session_starts_from_the_conversion_of_free_parameters_only_within_bounds():
+def test_the_session_starts_from_the_conversion_of_free_parameters_only_within_bounds(monkeypatch):
     reg = _toy_registry()
     src = Material(adapter="toy", model="toy", params={"diffuse": [0.6, 0.3, 0.1], "specular": 0.8, "alpha": 0.15})
     scene = ProbeScene(resolution=48)
     job = _job(reg, src, scene, {"specular": 0.5}, scheme="one", coarse=0)
-    ads = AdapterPool(reg)
-    if True:
-        start = informed_start(job, ads)
-        assert start == {"diffuse": (0.6, 0.3, 0.1), "alpha": 0.15}  # specular is fixed: not touched
-        ads["toy"].from_appearance = lambda m, a, b: {"diffuse": (1.7, -0.2, 0.5), "alpha": 9.0, "unused": 0.3}
-        # Clipped; the held one is taken as the start gives it, and stays held.
-        start = informed_start(job, ads)
-        assert start == {"diffuse": (1.0, 0.0, 0.5), "alpha": 1.0, "unused": 0.3}
-        assert "unused" not in fitted(job, start)
-        ads["toy"].from_appearance = lambda m, a, b: {"diffuse": 0.5, "alpha": float("nan")}
-        assert informed_start(job, ads) == {}  # a hint of the wrong shape or not finite is left out
+    toy = type(job.target_spec)
+    start = informed_start(job)
+    assert start == {"diffuse": (0.6, 0.3, 0.1), "alpha": 0.15}  # specular is fixed: not touched
+    monkeypatch.setattr(toy, "from_appearance", lambda self, a, b: {"diffuse": (1.7, -0.2, 0.5), "alpha": 9.0,
+                                                                     "unused": 0.3})
+    # Clipped; the held one is taken as the start gives it, and stays held.
+    start = informed_start(job)
+    assert start == {"diffuse": (1.0, 0.0, 0.5), "alpha": 1.0, "unused": 0.3}
+    assert "unused" not in fitted(job, start)
+    monkeypatch.setattr(toy, "from_appearance", lambda self, a, b: {"diffuse": 0.5, "alpha": float("nan")})
+    assert informed_start(job) == {}  # a hint of the wrong shape or not finite is left out
 
 
 def test_an_informed_start_saves_renders_and_is_reported(tmp_path):

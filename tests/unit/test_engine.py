@@ -20,8 +20,8 @@ ONE = Settings(scheme="one")
 def _renders(source_spec=TOY, scene=SCENE, adapter=None, batch=True):
     """The toy as source (TRUTH) and as target, each through its own cache, as a job has them."""
     adapter = adapter or ToyAdapter()
-    source = CachedRenderer(adapter, "toy", "toy", scene)
-    target = CachedRenderer(adapter, "toy", "toy", scene)
+    source = CachedRenderer(adapter, "toy", adapter.models["toy"], scene)
+    target = CachedRenderer(adapter, "toy", adapter.models["toy"], scene)
     if not batch:
         target.many = lambda items, scene=None: None  # no prefetch: the Jacobian's points one at a time
     return ProbeRenders(source, TRUTH, source_spec, target, scene), adapter

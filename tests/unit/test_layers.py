@@ -2,14 +2,10 @@
 render: the neutral reading carries each layer, the informed start sets it, and the target fits
 the layers the source has (`ParamSpec.fit_when_carried`) and holds the others."""
 
-from types import SimpleNamespace
-
 import numpy as np
 import pytest
 
-from brdfremap.adapters.cycles import appearance as cycles
 from brdfremap.adapters.mitsuba import appearance as mitsuba
-from brdfremap.adapters.mitsuba.bsdfs import conductor_preset
 from brdfremap.core.job.execute import fitted, informed_start
 from brdfremap.core.job.fitscene import choose
 from brdfremap.core.job.job import Job, Target, resolve
@@ -18,11 +14,6 @@ from brdfremap.core.data.scene import ProbeScene
 from brdfremap.core.data.schemas import Material
 from brdfremap.core.data.settings import Settings
 
-READINGS = {
-    "cycles": SimpleNamespace(appearance=cycles.appearance, from_appearance=cycles.from_appearance),
-    "mitsuba": SimpleNamespace(appearance=lambda m, p: mitsuba.appearance(m, p, conductor_preset),
-                               from_appearance=lambda m, a, base: mitsuba.from_appearance(m, a)),
-}
 COPPER = {"base_color": [0.955, 0.638, 0.538], "metallic": 1.0, "roughness": 0.35}
 
 
@@ -34,7 +25,7 @@ def registry():
 def _start(registry, src: Material, adapter: str, model: str, fix=None):
     job = resolve(Job(source=src, target=Target(adapter=adapter, model=model, fix=fix or {}),
                       scene=ProbeScene(), settings=Settings(), label="m.yaml"), registry)
-    start = informed_start(job, READINGS)
+    start = informed_start(job)
     return start, fitted(job, start)
 
 
@@ -87,7 +78,8 @@ def test_a_glass_keeps_its_ior_and_its_colour(registry):
     # Base Color tints what a Principled glass transmits, in and out; Mitsuba's transmittance each crossing
     # (a constant environment through a sphere: Base Color 0.5 and a transmittance of 0.707 both give 0.539).
     assert start["base_color"] == pytest.approx((0.81, 1.0, 0.9025))
-    look = cycles.appearance("principled", registry.get("cycles").models["principled"].complete(
+    principled = registry.get("cycles").models["principled"]
+    look = principled.appearance(principled.complete(
         {"transmission_weight": 1.0, "base_color": [1, 1, 1], "metallic": 0.0}))
     assert mitsuba.model_for(look)[0] == "roughdielectric"
 

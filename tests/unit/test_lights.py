@@ -110,7 +110,7 @@ def test_views_render_one_below_the_other_and_point_lights_add_up():
     a, b = PointLight(theta=30.0), PointLight(theta=100.0, phi=0.0, intensity=10.0)
     both = ProbeScene(lights=[a, b], resolution=32)
     views = ProbeScene(lights=[a], views=[{"lights": [b]}], resolution=32)
-    r = CachedRenderer(toy, "toy", "toy", views)
+    r = CachedRenderer(toy, "toy", toy.models["toy"], views)
     img = r(p)
     assert img.shape == (64, 32, 3)
     one = [toy.render("toy", p, ProbeScene(lights=[x], resolution=32)) for x in (a, b)]

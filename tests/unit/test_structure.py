@@ -118,15 +118,16 @@ ROOMS = (
     ("engine", ("engine",)),
     ("job", ("job",)),
     ("run", ("run",)),
-    ("library, tables, experiments", ("library", "tables", "experiments")),
+    ("experiments", ("experiments",)),
+    ("tables", ("tables",)),
+    ("textured sources", ("textured",)),
+    ("library", ("library",)),
     ("cli", ("cli",)),
 )
 """The rooms of docs/architecture.md, lowest first, by the folder of `core/` (the package itself and
 its two shims, `protocol` and `testing`, where plugin authors import from, are the plugin host's):
 a module imports from its own room and those below."""
-UPWARD = {("brdfremap.core.job.texturing", "brdfremap.core.tables"): "a textured job is remapped through a table",
-          ("brdfremap.core.job.texturing", "brdfremap.core.tables.texels"): "a textured job is remapped through a "
-                                                                            "table"}
+UPWARD: dict[tuple[str, str], str] = {}
 """The imports that go up, each with its reason."""
 
 

@@ -10,10 +10,26 @@ import math
 
 import numpy as np
 
-from brdfremap.core import Adapter, Appearance, LobeSpec, ModelSpec, ParamSpec, ProbeScene
+from brdfremap.core import Adapter, Appearance, LobeSpec, Model, ParamSpec, ProbeScene
 from brdfremap.core.testing import point_light_irradiance, sphere_hits
 
-TOY = ModelSpec(
+class Toy(Model):
+    """The toy model in one place: its parameters (below) and its neutral reading, which gives a
+    remap its informed start (optional for a model): the toy's lobe is Gaussian in the half-vector
+    angle like Beckmann's, and its specular weight stands in for the normal-incidence reflectance."""
+
+    def appearance(self, params):
+        return Appearance(kind="dielectric", alpha=params["alpha"], distribution="beckmann",
+                          specular=(params["specular"],) * 3, diffuse=tuple(params["diffuse"]))
+
+    def from_appearance(self, appearance, base):
+        out = {"diffuse": appearance.diffuse, "specular": sum(appearance.specular) / 3}
+        if appearance.alpha is not None:
+            out["alpha"] = appearance.alpha
+        return out
+
+
+TOY = Toy(
     name="toy",
     description="Lambert + a Gaussian-in-angle specular lobe.",
     parameters=(
@@ -40,7 +56,7 @@ class ToyAdapter(Adapter):
 
     def render(self, model, params, scene: ProbeScene, lobe=None):
         self.calls += 1
-        p = self.models[model].with_lobe(params, lobe)
+        p = self.as_model(model).with_lobe(params, lobe)  # the tool passes the model; a script may name it
         hits = sphere_hits(scene)
         a = p["alpha"]
         image = np.zeros((*hits.mask.shape, 3))
@@ -53,16 +69,3 @@ class ToyAdapter(Adapter):
             spec = p["specular"] * np.exp(-tan2 / a**2) / (math.pi * a**2 * cos_h**4) / 4
             image += (np.asarray(p["diffuse"]) / math.pi + spec[..., None]) * e[..., None]
         return image.astype(np.float32)
-
-    # The neutral reading that gives a remap its informed start (optional for an adapter): the
-    # toy's lobe is Gaussian in the half-vector angle like Beckmann's, and its specular weight
-    # stands in for the normal-incidence reflectance.
-    def appearance(self, model, params):
-        return Appearance(kind="dielectric", alpha=params["alpha"], distribution="beckmann",
-                          specular=(params["specular"],) * 3, diffuse=tuple(params["diffuse"]))
-
-    def from_appearance(self, model, appearance, base):
-        out = {"diffuse": appearance.diffuse, "specular": sum(appearance.specular) / 3}
-        if appearance.alpha is not None:
-            out["alpha"] = appearance.alpha
-        return out

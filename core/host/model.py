@@ -1,0 +1,48 @@
+"""One material model of one renderer, in one place.
+
+A `Model` is the `ModelSpec` it declares (its parameters, bounds, defaults, lobes, what it can
+render: smooth, transmissive, texturable) together with the conversions the exporters make for
+it: how a material of this model reads in renderer-neutral terms (`appearance`), this model's
+parameters for such a reading (`from_appearance`, the fit's informed start), the quantities that
+follow from its parameters (`derive`) and what the renderer does to them that the image cannot
+show the optimiser (`notes`). An adapter subclasses it once per model and adds the renderer's own
+form of the material (Mitsuba's BSDF dictionary, Blender's node); the adapter holds its models by
+name (`Adapter.models`) and the protocol passes the object. Reading or changing one model means
+reading or changing one class.
+
+The defaults here are a model with no reading: a renderer defined in YAML whose models declare
+only their parameters (`adapters/subprocess`), or a model an exporter has no convention for.
+"""
+
+from __future__ import annotations
+
+from ..data.appearance import Appearance
+from ..data.schemas import ModelSpec, Value
+
+
+class Model(ModelSpec):
+    """A renderer's material model: its declaration and its conversions (see the module)."""
+
+    def appearance(self, params: dict[str, Value]) -> Appearance | None:
+        """The material in renderer-neutral terms, as an exporter would read it, or None when this
+        model has no such reading. ``params`` is complete. Used as a source: it gives the fit its
+        informed start, and a library its choice of target model. Must not render."""
+        return None
+
+    def from_appearance(self, appearance: Appearance, base: dict[str, Value]) -> dict[str, Value]:
+        """This model's parameters for a neutral description by the exporters' conventions (the
+        fit's informed start; the fit corrects them), or {} when there is no such conversion.
+        ``base`` is the model's complete parameters as they stand (defaults, --fix), for a
+        conversion that depends on one the fit keeps. Only fitted parameters are used; values out
+        of bounds are clipped by the caller. Must not render."""
+        return {}
+
+    def derive(self, params: dict[str, Value]) -> dict[str, Value]:
+        """The quantities `derived` names, from complete parameters (a conductor's normal-incidence
+        reflectivity from its complex IOR), for reports and experiment plots. Must not render."""
+        return {}
+
+    def notes(self, params: dict[str, Value]) -> list[str]:
+        """What the renderer does to these parameters that the image cannot show the optimiser,
+        e.g. a reflectance it trims to conserve energy. A note makes a fitted result unreliable."""
+        return []

@@ -1,0 +1,69 @@
+"""A renderer's model is one object (issue 46): the adapters hold `Model`s, the protocol passes the
+object, and the adapters do not dispatch on a model's name."""
+
+import re
+from pathlib import Path
+
+import pytest
+
+from brdfremap.core.data.scene import ProbeScene
+from brdfremap.core.data.schemas import Material, ModelSpec, ParamSpec
+from brdfremap.core.host.model import Model
+from brdfremap.core.host.plugins import collect_adapters
+from brdfremap.core.job.execute import AdapterPool, execute
+from brdfremap.core.job.job import Job, Target, resolve
+from brdfremap.core.data.settings import Settings
+from brdfremap_example.adapter import ToyAdapter
+from helpers import registry_of
+
+ROOT = Path(__file__).resolve().parents[2]
+NAME_DISPATCH = re.compile(r"""model *(==|!=|in) *[("']""")
+ALLOWED = {"adapters/mitsuba/reader.py": "a blendbsdf's file nests two BSDFs, read slot by slot"}
+"""The places an adapter may still compare a model's name, each with why."""
+
+
+@pytest.mark.parametrize("adapter", ["mitsuba", "cycles", "threejs"])
+def test_every_shipped_model_is_one_object_of_its_adapter(adapter):
+    models = collect_adapters().get(adapter).models
+    assert models and all(isinstance(m, Model) and m.name == name for name, m in models.items())
+    assert len({type(m) for m in models.values()}) > 1 or adapter == "threejs"  # a class per kind of model
+
+
+def test_no_adapter_dispatches_on_a_models_name():
+    found = {str(p.relative_to(ROOT)): [n for n, line in enumerate(p.read_text().splitlines(), 1)
+                                        if NAME_DISPATCH.search(line)]
+             for p in (ROOT / "adapters").rglob("*.py") if "node_modules" not in p.parts}
+    found = {k: v for k, v in found.items() if v}
+    assert set(found) <= set(ALLOWED) and sum(map(len, found.values())) <= 5, found
+
+
+class _Recording(ToyAdapter):
+    seen: list = []
+
+    def render(self, model, params, scene, lobe=None):
+        self.seen.append(model)
+        return super().render(model, params, scene, lobe)
+
+
+def test_the_job_passes_the_model_object_to_the_adapter():
+    reg = registry_of("toy", _Recording)
+    src = Material(adapter="toy", model="toy", params={"diffuse": [0.6, 0.3, 0.1], "specular": 0.8, "alpha": 0.15})
+    job = Job(source=src, target=Target(adapter="toy", model="toy"), scene=ProbeScene(resolution=32),
+              settings=Settings(scheme="one", coarse=0, validation="none"), label="m.yaml")
+    resolved = resolve(job, reg)
+    assert resolved.look is not None and resolved.look.alpha == pytest.approx(0.15)  # read once, from the model
+    pool = AdapterPool(reg)
+    try:
+        execute(resolved, pool)
+    finally:
+        pool.close()
+    assert _Recording.seen and all(m is resolved.target_spec for m in _Recording.seen)
+
+
+def test_a_plugin_of_plain_modelspecs_is_unavailable_with_one_line_saying_why():
+    class Old(ToyAdapter):
+        name = "old"
+        models = {"m": ModelSpec(name="m", parameters=(ParamSpec(name="a", kind="scalar", default=0.5),))}
+
+    why = registry_of("old", Old).get("old").unavailable_reason()
+    assert "'m' is a plain ModelSpec" in why and "brdfremap.core.Model" in why and "\n" not in why
