@@ -11,6 +11,8 @@ from brdfremap.core.data.schemas import Lobe, LobeSpec, ParamKind, ParamSpec
 from brdfremap.core.host.model import Model
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from .declared import DeclaredModel, Reading, Source, problem
+
 FORMAT = 2
 """The definition format this version writes and reads strictly. 1 (a definition without `format:`)
 gave a fitted parameter that neither short-form lobe switches off to the specular stage; 2 asks for
@@ -54,6 +56,16 @@ class ModelDef(BaseModel):
                                           description="Extra text substituted into the scene template for this "
                                                       "model, e.g. its <bsdf> element; it may use the scene's "
                                                       "placeholders and {p_<parameter>} (RGB through rgb_format).")
+    start: dict[str, Source] = Field(
+        default_factory=dict,
+        description="The exporters' conversion of a neutral reading into this model, which a remap to it starts "
+                    "from: per parameter, a quantity of the reading (alpha, diffuse, base_color, ior, ...), as it is "
+                    "or {from: QUANTITY, as: CONVERSION or [CONVERSIONS], scale: NUMBER}, or {value: CONSTANT}. "
+                    "What the reading lacks (no alpha, no coat) is left out.")
+    reading: Reading | None = Field(
+        None, description="How an exporter reads a material of this model in neutral terms, so that a remap from it "
+                          "starts informed: kind (conductor or dielectric) and Appearance fields, each a parameter, "
+                          "as it is or {from: PARAMETER, as: ..., scale: ...}, or {value: CONSTANT}.")
 
 
 class Calibration(BaseModel):
@@ -154,6 +166,15 @@ class RendererDef(BaseModel):
                              "beside this one) too")
         return self
 
+    @model_validator(mode="after")
+    def _declared(self) -> "RendererDef":
+        """Each model's `start:` and `reading:` name its parameters and the reading's quantities, types fitting."""
+        for name, m in self.models.items():
+            msg = problem(name, m.parameters, m.start, m.reading)
+            if msg:
+                raise ValueError(msg)
+        return self
+
     def format_notes(self) -> list[str]:
         """What a definition of an older format says that the current format says otherwise: each a
         line naming the model and what to write instead ([] for a current one)."""
@@ -184,8 +205,9 @@ class RendererDef(BaseModel):
                     lobes[lobe] = LobeSpec(overrides=v, params=tuple(dict.fromkeys(mine)))
                 else:
                     lobes[lobe] = LobeSpec(**v)
-            specs[name] = Model(name=name, description=m.description, parameters=tuple(m.parameters),
-                                lobes=lobes)
+            spec = dict(name=name, description=m.description, parameters=tuple(m.parameters), lobes=lobes)
+            declared = m.start or m.reading is not None
+            specs[name] = DeclaredModel(**spec, start=m.start, reading=m.reading) if declared else Model(**spec)
         return specs
 
 

@@ -416,3 +416,113 @@ def test_an_escaped_output_placeholder_is_not_taken_for_one(tmp_path):
     with pytest.raises(ConfigError) as exc:
         adapter_class(path)
     assert "use {output}" in str(exc.value)
+
+
+# -- a declared start and reading (issue 46): the exporters' conversions as data -----------------
+
+PLASTIC = ("[{name: distribution, kind: choice, choices: [beckmann, ggx], default: ggx}, "
+           "{name: albedo, kind: rgb, default: [0.5, 0.5, 0.5]}, {name: roughness, kind: scalar, default: 0.5}, "
+           "{name: gloss, kind: scalar, default: 0.5, fit: false}, "
+           "{name: ior, kind: scalar, lower: 1.0, upper: 3.0, default: 1.5}, "
+           "{name: level, kind: scalar, default: 0.5, fit: false}]")
+DECLARED = """    start:
+      distribution: distribution
+      albedo: base_color
+      roughness: {from: alpha, as: sqrt}
+      gloss: {from: alpha, as: [sqrt, one_minus]}
+      ior: ior
+      level: {from: specular, as: mean, scale: 12.5}
+    reading:
+      kind: dielectric
+      alpha: {from: roughness, as: square}
+      distribution: distribution
+      diffuse: albedo
+      ior: ior
+"""
+
+
+def _declared(tmp_path, declared: str = DECLARED) -> Path:
+    path = _definition(tmp_path, params=PLASTIC)
+    path.write_text(path.read_text() + declared)
+    return path
+
+
+def _start(src, adapter: str, model: str) -> dict:
+    from brdfremap.core.data.settings import Settings
+    from brdfremap.core.host.plugins import collect_adapters
+    from brdfremap.core.job.execute import informed_start
+    from brdfremap.core.job.job import Job, Target, resolve
+
+    registry = collect_adapters()
+    names = {a: registry.resolve(a) if a.endswith(".yaml") else a for a in (src.adapter, adapter)}
+    src = src.model_copy(update={"adapter": names[src.adapter]})
+    job = Job(source=src, target=Target(adapter=names[adapter], model=model), scene=ProbeScene(), settings=Settings(),
+              label="m.yaml")
+    return informed_start(resolve(job, registry))
+
+
+def test_a_declared_start_is_the_informed_start_leaving_out_what_the_reading_lacks(tmp_path):
+    from brdfremap.core.data.schemas import Material
+
+    path = str(_declared(tmp_path))
+    plastic = Material(adapter="mitsuba", model="roughplastic", params={
+        "distribution": "beckmann", "alpha": 0.09, "int_ior": 1.6, "diffuse_reflectance": [0.6, 0.2, 0.1]})
+    start = _start(plastic, path, "lambert")
+    assert start["distribution"] == "beckmann" and start["albedo"] == pytest.approx((0.6, 0.2, 0.1))
+    assert start["roughness"] == pytest.approx(0.3) and start["gloss"] == pytest.approx(0.7)  # held, set all the same
+    assert start["ior"] == pytest.approx(1.6 / 1.000277)
+    assert start["level"] == pytest.approx(((start["ior"] - 1) / (start["ior"] + 1)) ** 2 * 12.5)
+    # A Lambertian source has no specular lobe (no α) and names no distribution: neither is started.
+    white = Material(adapter="mitsuba", model="diffuse", params={"reflectance": [0.8, 0.8, 0.8]})
+    start = _start(white, path, "lambert")
+    assert start["albedo"] == (0.8, 0.8, 0.8) and not {"roughness", "gloss", "distribution"} & set(start)
+
+
+def test_a_declared_reading_starts_a_remap_from_the_renderer(tmp_path):
+    from brdfremap.core.data.schemas import Material
+
+    mine = Material(adapter=str(_declared(tmp_path)), model="lambert", params={
+        "distribution": "beckmann", "albedo": [0.6, 0.2, 0.1], "roughness": 0.4, "ior": 1.6})
+    start = _start(mine, "mitsuba", "roughplastic")
+    assert start["distribution"] == "beckmann" and start["alpha"] == pytest.approx(0.16)
+    assert start["diffuse_reflectance"] == pytest.approx((0.6, 0.2, 0.1))
+    assert start["int_ior"] == pytest.approx(1.6 * 1.000277)
+
+
+def test_the_worked_examples_start_converts_each_model():
+    """examples/renderer/my-renderer.yaml: a conductor's complex IOR as it is; Disney's roughness √α and
+    specular F0 / 0.08 for its principled model."""
+    from brdfremap.core.data.schemas import Material
+
+    example = str(SHIPPED.parents[1] / "examples" / "renderer" / "my-renderer.yaml")
+    gold = Material(adapter="mitsuba", model="roughconductor", params={
+        "distribution": "beckmann", "eta": [0.14, 0.37, 1.44], "k": [3.98, 2.38, 1.6], "alpha": 0.1})
+    assert _start(gold, example, "conductor") == {"distribution": "beckmann", "eta": (0.14, 0.37, 1.44),
+                                                  "k": (3.98, 2.38, 1.6), "alpha": 0.1}
+    plastic = Material(adapter="mitsuba", model="roughplastic", params={
+        "alpha": 0.09, "int_ior": 1.5 * 1.000277, "diffuse_reflectance": [0.6, 0.2, 0.1]})
+    start = _start(plastic, example, "principled")
+    assert start["base_color"] == pytest.approx((0.6, 0.2, 0.1)) and start["metallic"] == 0.0
+    assert start["roughness"] == pytest.approx(0.3) and start["specular"] == pytest.approx(0.04 / 0.08)
+
+
+@pytest.mark.parametrize("change, words", [
+    (("as: sqrt}", "as: sqr}"), "models.lambert.start.roughness.as: unknown conversion 'sqr' (known: identity, sqrt,"),
+    (("albedo: base_color", "albedo: base_colour"),
+     "models.lambert.start.albedo: 'base_colour' is not a quantity of the neutral reading (known: kind,"),
+    (("      ior: ior\n      level", "      iorr: ior\n      level"),
+     "models.lambert.start.iorr: not a parameter of lambert (its parameters: distribution, albedo,"),
+    (("level: {from: specular, as: mean,", "level: {from: specular,"),
+     "models.lambert.start.level: specular gives a colour, and level takes a number: add `as: mean`"),
+    (("diffuse: albedo", "diffuse: colour"), "models.lambert.reading.diffuse: 'colour' is not a parameter of lambert"),
+    (("kind: dielectric", "kind: metal"), "models.lambert.reading.kind: Input should be 'conductor' or 'dielectric'"),
+    (("{from: roughness, as: square}", "{from: roughness, as: square, eval: 'x*x'}"),
+     "models.lambert.reading.alpha.eval: unknown field"),
+])
+def test_a_bad_start_or_reading_is_one_line_naming_the_file_and_field(tmp_path, change, words):
+    old, new = change
+    assert old in DECLARED
+    with pytest.raises(ConfigError) as exc:
+        adapter_class(_declared(tmp_path, DECLARED.replace(old, new)))
+    msg = str(exc.value)
+    assert msg.startswith(f"{tmp_path / 'brace.yaml'}: ") and words in msg and "\n" not in msg, msg
