@@ -1,6 +1,6 @@
 """Mitsuba conductor presets remapped to Cycles: error and renders per case.
 
-    python bench/conductors.py [--quick] [--out docs/conductors.md]
+    python bench/conductors.py [--quick] [--out docs/measurements/conductors.md]
 
 Sources: Mitsuba roughconductor (Beckmann) with presets Au, Ag, Cu, Al, Cr at alpha 0.05,
 0.1, 0.2, 0.4. Targets: Cycles principled, glossy GGX, glossy Beckmann. Prints one row per
@@ -25,7 +25,7 @@ TARGETS = (("principled", ()), ("glossy", ("distribution=ggx",)), ("glossy", ("d
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true", help="Au and Cu at alpha 0.1 only")
-    ap.add_argument("--out", default=str(ROOT / "docs" / "conductors.md"))
+    ap.add_argument("--out", default=str(ROOT / "docs" / "measurements" / "conductors.md"))
     args = ap.parse_args()
     presets, alphas = (("Au", "Cu"), (0.1,)) if args.quick else (PRESETS, ALPHAS)
     reg = registry()

@@ -1,7 +1,7 @@
 """Calibration of every light type in both renderers: a white Lambertian (albedo 0.8) against the
 analytic radiance (`core.testing.analytic_lambert`) and Mitsuba against Cycles.
 
-    python bench/lights.py [--resolution 128] [--spp 256] [--out docs/lights.md]
+    python bench/lights.py [--resolution 128] [--spp 256] [--out docs/measurements/lights.md]
 
 Each light of the held-out validation set (`core.job.validation`) and the probe's own, two point
 lights at once, a constant environment and the built-in studio are rendered at the given

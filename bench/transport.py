@@ -2,7 +2,7 @@
 its analytic image): a smooth and a rough clear glass of IOR 1.5 (each adapter's `glasses`), and
 a white Lambertian as the control, under the probe's point light and the studio environment.
 
-    python bench/transport.py [--resolution 128] [--spp 128] [--out docs/transport.md]
+    python bench/transport.py [--resolution 128] [--spp 128] [--out docs/measurements/transport.md]
 
 Each material is rendered twice per renderer (two seeds); the noise floor of a comparison is the
 renderers' own noise added in quadrature, and "beyond" is the part of the error it does not

@@ -2,7 +2,7 @@
 
     python bench/validation.py run [--tree DIR] --label before --out out/validation-before.json [--only NAME]
     python bench/validation.py reevaluate out/validation-before.json --out out/validation-before.json
-    python bench/validation.py compare out/validation-before.json out/validation-after.json [--table docs/validation.md]
+    python bench/validation.py compare out/validation-before.json out/validation-after.json [--table docs/measurements/validation.md]
 
 `run` fits each case with the `remap` command of a source tree (``--tree``: a folder holding the
 ``brdfremap`` package of another version, put first on PYTHONPATH; default this checkout), then

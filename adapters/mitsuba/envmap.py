@@ -5,7 +5,7 @@ and 1 on the rows' centres), where the project's convention (`core.data.environm
 puts row centres at (i + 0.5) / H: read as it is, every feature of a map lands up to half a
 row off, which a mirror shows and a lens (a glass sphere) magnifies (a perfect mirror under
 the studio: 2.45 % from the analytic image, 1.07 % with the map resampled, as Cycles' 1.08 %;
-docs/transport.md). Columns agree. So Mitsuba is given the map resampled: 2H + 1 rows at
+docs/measurements/transport.md). Columns agree. So Mitsuba is given the map resampled: 2H + 1 rows at
 v = j / 2H, on which its linear interpolation is the convention's exactly (the convention's
 rows are linear between its row centres, each of which is one of these rows)."""
 

@@ -1,5 +1,5 @@
 """The engine's private knobs and its version. Users choose `Settings`; these stay with the engine
-(benchmarks set them to measure what each one buys: see docs/engine.md)."""
+(benchmarks set them to measure what each one buys: see docs/measurements/engine.md)."""
 
 from __future__ import annotations
 

@@ -48,7 +48,7 @@ ENV_MIN_RESOLUTION = 32
 quarter of the cost. The samples it takes to resolve it (up to 16 times the scene's) made these
 fits among the costliest of a library (a smooth plastic 150 s with `--jobs 2`, 17 s at half the
 size), and judged under the held-out lights the fits at either size are the same (within 0.1-1.3
-points beyond the noise on the public corpus: docs/speed.md). A rough glass's is not halved: its
+points beyond the noise on the public corpus: docs/measurements/speed.md). A rough glass's is not halved: its
 light through the sphere is noisy at any samples (16-20 % at 256 spp), and a quarter of the pixels
 left its fit twice as far off under the turned studio (9.4 % -> 25.9 % beyond the noise)."""
 

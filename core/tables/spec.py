@@ -145,7 +145,7 @@ class TableSpec(Strict):
                                                   "first where it is as good (fits that landed in different optima "
                                                   "become one family a map can follow). Twice the fits; off by "
                                                   "default: on the shipped tables it did not bring lookups closer "
-                                                  "to direct fits (docs/tables.md).")
+                                                  "to direct fits (docs/measurements/tables.md).")
     follow: list[str] = Field(default_factory=list, description="Axes along which each grid point is fitted again "
                                                                 "from its neighbour's fit, one start, up the axis and "
                                                                 "then back down; the refit replaces the fit where it "

@@ -1,5 +1,5 @@
 """Every light type rendered alike by Mitsuba and Cycles, in the same units and orientation, and
-against the analytic radiance (the full table, at more samples: bench/lights.py, docs/lights.md).
+against the analytic radiance (the full table, at more samples: bench/lights.py, docs/measurements/lights.md).
 
 The environment's orientation in Cycles was found by rendering the studio with every order and
 sign of the axes and keeping the one that matches the analytic image (5.6 % at 32 spp, the next
