@@ -208,8 +208,8 @@ class MitsubaAdapter(Adapter):
     def describe(self) -> dict[str, Any]:
         return {"renderer": f"Mitsuba {self.mi.__version__}", **as_dict(self.choice)}
 
-    def scene_dict(self, model: MitsubaModel, params: dict[str, Value], scene: ProbeScene) -> dict[str, Any]:
-        mi = self.mi
+    def scene_dict(self, model: MitsubaModel | str, params: dict[str, Value], scene: ProbeScene) -> dict[str, Any]:
+        mi, model = self.mi, model_of(model)
         cam = scene.camera
         return {
             "type": "scene",
