@@ -21,6 +21,7 @@ def parser() -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     from ..host.check import run as run_checks
+    from ..host.protocol import plugin_call
     from ..host.plugins import collect_adapters
 
     registry = collect_adapters()
@@ -42,8 +43,8 @@ def run(args: argparse.Namespace) -> int:
         glass = (glass[0], entry.models[glass[0]].complete(glass[1], file=f"adapter {name!r}", prefix="glasses.smooth"))
     adapter = registry.create(name)
     try:
-        rows = run_checks(lambda model, params, scene, lobe=None: adapter.render(adapter.models[model], params, scene,
-                                                                                 lobe), models,
+        rows = run_checks(lambda model, params, scene, lobe=None: plugin_call(
+                              adapter.render, f"adapter {name!r}", adapter.models[model], params, scene, lobe), models,
                           white, glass, LightType.ENVIRONMENT in entry.light_types,
                           entry.factory.transmission_limit)
     finally:

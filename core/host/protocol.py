@@ -5,12 +5,12 @@ from __future__ import annotations
 import abc
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Any, Callable, ClassVar
 
 import numpy as np
 
 from ..data.appearance import Appearance
-from ..data.errors import ConfigError, RenderError
+from ..data.errors import ConfigError, RemapError, RenderError
 from ..data.scene import ProbeScene
 from ..data.schemas import Value
 from ..data.textures import Texture, TextureMap
@@ -157,6 +157,20 @@ class Adapter(abc.ABC):
 
     def __exit__(self, *exc):
         self.close()
+
+
+def plugin_call(fn: Callable[..., Any], who: str, *args: Any) -> Any:
+    """``fn(*args)``, a plugin's own code: an error of the tool's kind passes as it is, any other
+    exception (a bug in the plugin, its renderer's own error type) becomes a RenderError naming the
+    adapter, one line instead of a traceback."""
+    try:
+        return fn(*args)
+    except RemapError:
+        raise
+    except Exception as exc:
+        first = (str(exc).strip().splitlines() or [""])[0]
+        raise RenderError(f"{who}: its render raised {type(exc).__name__}{': ' + first if first else ''} (raise "
+                          "brdfremap.core.RenderError with a message for a failure it knows)") from exc
 
 
 def check_image(img: Any, scene: ProbeScene, who: str) -> np.ndarray:

@@ -20,7 +20,7 @@ from ..host.model import Model
 from ..engine.levels import Level
 from ..engine.results import Agreement, Validation
 from ..engine.schedule import highlight_pixels
-from ..host.protocol import Adapter, check_image
+from ..host.protocol import Adapter, check_image, plugin_call
 from .agreement import agreement, reference_kind
 from .cache import RenderCache, render_key
 from .validation import point_resolution, validate
@@ -63,7 +63,8 @@ class CachedRenderer:
 
         def render():
             self.by_resolution[sc.resolution, sc.spp] += 1
-            return check_image(self.adapter.render(self.model, dict(params), sc, lobe), sc, self.who)
+            return check_image(plugin_call(self.adapter.render, self.who, self.model, dict(params), sc, lobe), sc,
+                               self.who)
 
         return self.cache.get_or_render(self._key(params, lobe, sc), render)
 
@@ -82,7 +83,7 @@ class CachedRenderer:
                 todo.append((key, params, lobe))
         if len(todo) < 2:
             return
-        images = self.adapter.render_batch([(self.model, dict(p), sc, lobe) for _, p, lobe in todo])
+        images = plugin_call(self.adapter.render_batch, self.who, [(self.model, dict(p), sc, lobe) for _, p, lobe in todo])
         for (key, _, _), img in zip(todo, images):
             self.by_resolution[sc.resolution, sc.spp] += 1
             checked = check_image(img, sc, self.who)

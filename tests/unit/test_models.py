@@ -67,3 +67,19 @@ def test_a_plugin_of_plain_modelspecs_is_unavailable_with_one_line_saying_why():
 
     why = registry_of("old", Old).get("old").unavailable_reason()
     assert "'m' is a plain ModelSpec" in why and "brdfremap.core.Model" in why and "\n" not in why
+
+
+def test_a_plugins_own_exception_is_one_line_naming_the_adapter():
+    from brdfremap.core.data.errors import RenderError
+    from brdfremap.core.job.renders import CachedRenderer
+
+    class Broken(ToyAdapter):
+        def render(self, model, params, scene, lobe=None):
+            raise RuntimeError("the renderer's own failure\nand its second line")
+
+    adapter = Broken()
+    r = CachedRenderer(adapter, "broken", adapter.models["toy"], ProbeScene(resolution=16))
+    with pytest.raises(RenderError) as exc:
+        r(adapter.models["toy"].complete({}))
+    assert "adapter 'broken'" in str(exc.value) and "RuntimeError: the renderer's own failure" in str(exc.value)
+    assert "\n" not in str(exc.value)
