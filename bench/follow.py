@@ -16,7 +16,7 @@ import numpy as np
 
 
 def fit(roughness: float, grey: float, ior: float, start: dict | None = None) -> tuple[dict, float]:
-    from brdfremap.core.job.execute import run_in_worker
+    from brdfremap.core.job.execute import adapter_pool, run_job
     from brdfremap.core.job.job import Job, Target, resolve
     from brdfremap.core.host.plugins import collect_adapters
     from brdfremap.core.data.schemas import Material
@@ -27,7 +27,9 @@ def fit(roughness: float, grey: float, ior: float, start: dict | None = None) ->
     settings = Settings(validation="none", **({"starts": 1} if start else {}))
     job = Job(source=source, target=Target(adapter="mitsuba", model="roughplastic", fix={"distribution": "ggx"}),
               settings=settings, start=start)
-    report = run_in_worker(resolve(job, collect_adapters())).report  # this process's adapters, kept between fits
+    registry = collect_adapters()
+    with adapter_pool(registry) as adapters:
+        report = run_job(resolve(job, registry), adapters).report
     return dict(report.params), report.metrics.relative_rmse
 
 

@@ -28,10 +28,6 @@ from .models import MODELS
 from .variant import as_dict, choose_variant
 
 
-def _rgb(v: Value) -> dict:
-    return {"type": "rgb", "value": list(v)}  # type: ignore[arg-type]
-
-
 def emitters(scene: ProbeScene, mi) -> dict[str, Any]:
     """The scene's lights as Mitsuba emitters: a point light is `point` (intensity in W/sr), the
     environment `envmap` with an identity transform (`core.data.environment`'s orientation is Mitsuba's),
@@ -68,9 +64,10 @@ def model_of(model: MitsubaModel | str) -> MitsubaModel:
     """One of Mitsuba's models, by itself or by name (scripts name it)."""
     if isinstance(model, MitsubaModel):
         return model
-    if model not in MODELS:
-        raise ConfigError(f"mitsuba adapter has no model {model!r}")
-    return MODELS[model]
+    name = getattr(model, "name", model)
+    if name not in MODELS:
+        raise ConfigError(f"adapter 'mitsuba' has no model {name!r} (models: {', '.join(sorted(MODELS))})")
+    return MODELS[name]
 
 
 def bsdf_dict(model: MitsubaModel | str, p: dict[str, Value]) -> dict[str, Any]:

@@ -91,8 +91,12 @@ class Source(BaseModel):
 
     @classmethod
     def __get_pydantic_json_schema__(cls, core_schema: Any, handler: Any) -> dict[str, Any]:
-        """The short forms too: a name, a number, three numbers."""
+        """The short forms too: a name, a number, three numbers; `as` one conversion or a list."""
         full = handler.resolve_ref_schema(handler(core_schema))
+        conv = full.get("properties", {}).get("as")
+        if conv is not None:
+            full["properties"]["as"] = {**{k: v for k, v in conv.items() if k not in ("type", "items")},
+                                        "anyOf": [{"type": "string"}, {"type": "array", "items": {"type": "string"}}]}
         return {"anyOf": [{"type": "string"}, {"type": "number"},
                           {"type": "array", "items": {"type": "number"}, "minItems": 3, "maxItems": 3}, full]}
 

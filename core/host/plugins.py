@@ -50,12 +50,12 @@ class AdapterEntry:
         return None if check is None else check(scene)
 
     def unavailable_reason(self) -> str | None:
-        old = sorted(n for n, m in self.models.items() if not isinstance(m, Model))
-        if old:
-            return (f"its model {old[0]!r} is a plain ModelSpec: declare each model as a brdfremap.core.Model (the "
-                    "same fields; the protocol passes the model object, and a Model subclass carries its reading "
-                    "and converted start)")
         try:
+            old = sorted(n for n, m in self.models.items() if not isinstance(m, Model))
+            if old:
+                return (f"its model {old[0]!r} is a plain ModelSpec: declare each model as a brdfremap.core.Model "
+                        "(the same fields; the protocol passes the model object, and a Model subclass carries its "
+                        "reading and converted start)")
             return self.factory.unavailable_reason()
         except Exception as exc:  # a broken plugin is listed with its error, not fatal
             return f"availability check failed: {exc}"

@@ -57,8 +57,8 @@ class Outcome:
 
 class AdapterPool:
     """The adapters one process has open: each constructed once (this is where renderers get
-    imported and workers start) and closed together. Passed to whatever renders: nothing finds
-    it by itself."""
+    imported and workers start) and closed together. Passed to whatever renders in the process
+    that opened it; a worker process keeps its own (`_worker_adapters`)."""
 
     def __init__(self, registry: AdapterRegistry):
         self.registry = registry
@@ -97,11 +97,11 @@ def run_job(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
 
 
 @functools.lru_cache(maxsize=None)
-def worker_adapters(renderer_files: tuple[str, ...]) -> AdapterPool:
+def _worker_adapters(renderer_files: tuple[str, ...]) -> AdapterPool:
     """A worker process's adapters (a local pool's, a Dask worker's): opened at its first job and
     kept for its life, so that every job after the first finds its renderers started; closed when
     the process ends. Only `run_in_worker` uses them: the process that runs jobs itself passes its
-    own pool."""
+    own pool. Called under the process's job lock: a Dask worker's threads open one pool."""
     registry = collect_adapters()
     for f in renderer_files:  # the renderer definitions the caller loaded from files
         registry.resolve(f)
@@ -111,8 +111,17 @@ def worker_adapters(renderer_files: tuple[str, ...]) -> AdapterPool:
 
 
 def run_in_worker(resolved: Resolved, renderer_files: tuple[str, ...] = ()) -> Outcome:
-    """Run a resolved job sent to a worker process, with that process's adapters."""
-    return run_job(resolved, worker_adapters(tuple(renderer_files)))
+    """Run a resolved job sent to a worker process, with that process's adapters: only where they are
+    the versions the job was resolved with (a worker with another renderer or adapter would store
+    its renders under this machine's key)."""
+    with _ONE_AT_A_TIME:  # one pool per process, opened by its first job
+        adapters = _worker_adapters(tuple(renderer_files))
+        versions = {name: adapters.registry.get(name).version for name in resolved.job.versions}
+        if versions != resolved.job.versions:
+            raise RenderError(f"the worker has other renderers than the job was planned with (adapters {versions}; "
+                              f"here: {resolved.job.versions}): install the same brdf-remap and renderers on every "
+                              "worker")
+        return execute(resolved, adapters)
 
 
 def source_highlight(source: CachedRenderer, resolved: Resolved, scene: ProbeScene) -> float:

@@ -1,6 +1,6 @@
 """One unit of work: a source material remapped to a target model, under a scene and settings.
 
-A `Job` is data (pydantic: serialisable, sent to worker processes and Dask workers as is).
+A `Job` is data (pydantic: serialisable, hashable into its key).
 `resolve` validates it once, before any render, against the installed adapters and returns it
 in canonical form (adapter names checked, parameters completed and coerced, adapter versions
 recorded), together with what the engine needs. `Job.key()` of a canonical job identifies its
@@ -149,6 +149,9 @@ def model_of(registry: AdapterRegistry, adapter: str, model: str, file: str | No
         known = ", ".join(sorted(entry.models)) or "none"
         raise ConfigError(f"adapter {adapter!r} has no model {model!r} (models: {known})", file=file,
                           field=f"{prefix}model")
+    if not isinstance(entry.models[model], Model):  # a plugin written before models were objects
+        raise ConfigError(f"adapter {adapter!r} is unavailable: {entry.unavailable_reason()}", file=file,
+                          field=f"{prefix}adapter")
     return entry.models[model]
 
 
@@ -164,9 +167,9 @@ def resolve(job: Job, registry: AdapterRegistry, where: Where = Where(),
         raise ConfigError(f"drives {', '.join(sorted(src.textures))} by images: a fit remaps one uniform material; "
                           "remap a textured one texel by texel through a table (--table TABLE, built with `remap "
                           "table build`)", file=where.source_file, field="textures")
-    if src.textures and textured is None:
-        raise ConfigError("drives its inputs by images, and this command remaps uniform materials only: convert it "
-                          "with `remap convert --table TABLE` or `remap --table TABLE`", file=where.source_file,
+    if src.textures and textured is None:  # a caller's mistake, not the user's: every command passes it
+        raise ConfigError("drives its inputs by images, and the job was made without its texel-by-texel step: "
+                          "resolve(..., textured=brdfremap.core.textured.texture_result)", file=where.source_file,
                           field="textures")
     settled = src_spec.settle(src.params, file=where.source_file, prefix=where.params_prefix)
     src_params = src_spec.complete(settled, file=where.source_file, prefix=where.params_prefix)

@@ -83,7 +83,8 @@ class CachedRenderer:
                 todo.append((key, params, lobe))
         if len(todo) < 2:
             return
-        images = plugin_call(self.adapter.render_batch, self.who, [(self.model, dict(p), sc, lobe) for _, p, lobe in todo])
+        requests = [(self.model, dict(p), sc, lobe) for _, p, lobe in todo]
+        images = plugin_call(self.adapter.render_batch, self.who, requests)
         for (key, _, _), img in zip(todo, images):
             self.by_resolution[sc.resolution, sc.spp] += 1
             checked = check_image(img, sc, self.who)
@@ -114,9 +115,11 @@ class ProbeRenders:
     def __init__(self, source: CachedRenderer, source_params: dict[str, Value], source_spec: Model,
                  target: CachedRenderer, scene: ProbeScene, given: ProbeScene | None = None,
                  given_noise: float = 0.0, resolve_limit: float | None = None, sharp: bool = False,
-                 look: Appearance | None = None):
+                 look: Appearance | None | type[Ellipsis] = ...):
         self.source, self.source_params, self.source_spec = source, dict(source_params), source_spec
-        self.look = look if look is not None or source_spec is None else source_spec.appearance(self.source_params)
+        if look is ...:  # not given: read here (a job passes `Resolved.look`, read once)
+            look = None if source_spec is None else source_spec.appearance(self.source_params)
+        self.look = look
         """The source's neutral reading (`Resolved.look`): which reference material the renderers' floor
         is measured on."""
         self.target, self.scene = target, scene

@@ -22,7 +22,7 @@ from ..data.settings import Settings
 from ..data.textures import Texture
 from ..host.plugins import AdapterRegistry
 from ..job.execute import IMAGES, AdapterPool
-from ..job.job import Job, Target, Where, resolve
+from ..job.job import Job, Target, Where, model_of, resolve
 from ..run.executors import Workers
 from ..run.runner import Done, Runner, Task
 from ..run.store import Store, owned
@@ -214,7 +214,7 @@ def _prepare(item: Item, dest: Destination, registry: AdapterRegistry, adapters:
             item.model, item.why = src.model, "its own model (the source is already this adapter's)"
         _task(item, dest, fix, registry, scene, settings)
         return
-    model = registry.get(src.adapter).models[src.model]
+    model = model_of(registry, src.adapter, src.model, e.file, f"{e.name}: ")
     item.look = model.appearance(model.complete(src.params, file=e.file, prefix=f"{e.name}: params"))
     if dest.model is None:
         choice = adapters[dest.adapter].model_for(item.look) if item.look is not None else None

@@ -83,3 +83,31 @@ def test_a_plugins_own_exception_is_one_line_naming_the_adapter():
         r(adapter.models["toy"].complete({}))
     assert "adapter 'broken'" in str(exc.value) and "RuntimeError: the renderer's own failure" in str(exc.value)
     assert "\n" not in str(exc.value)
+
+
+def test_a_worker_with_other_renderers_than_the_job_was_planned_with_refuses_it(monkeypatch):
+    from brdfremap.core.data.errors import RenderError
+    from brdfremap.core.job import execute as ex
+
+    class Other(ToyAdapter):
+        version = "2-other-machine"
+
+    src = Material(adapter="toy", model="toy", params={"diffuse": [0.6, 0.3, 0.1]})
+    job = Job(source=src, target=Target(adapter="toy", model="toy"), scene=ProbeScene(resolution=16),
+              settings=Settings(validation="none"), label="m.yaml")
+    resolved = resolve(job, registry_of("toy", ToyAdapter))
+    monkeypatch.setattr(ex, "_worker_adapters", lambda files: AdapterPool(registry_of("toy", Other)))
+    with pytest.raises(RenderError, match="other renderers than the job was planned with"):
+        ex.run_in_worker(resolved)
+
+
+def test_a_library_from_a_plugin_of_plain_modelspecs_fails_its_materials_in_one_line():
+    from brdfremap.core.data.errors import ConfigError
+    from brdfremap.core.job.job import model_of
+
+    class Old(ToyAdapter):
+        name = "old"
+        models = {"m": ModelSpec(name="m", parameters=(ParamSpec(name="a", kind="scalar", default=0.5),))}
+
+    with pytest.raises(ConfigError, match="is a plain ModelSpec"):
+        model_of(registry_of("old", Old), "old", "m", "lib.xml", "wood: ")
