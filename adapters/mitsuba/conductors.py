@@ -18,7 +18,7 @@ from brdfremap.core.data.appearance import (
 from brdfremap.core.data.schemas import LobeSpec, ParamSpec, Value
 
 from .bsdfs import conductor_preset
-from .model import MitsubaModel, alpha_of, mul, rgb
+from .model import MitsubaModel, alpha_of, mul, rgb, rough_start
 from .params import (
     ALPHA,
     AS_ALPHA,
@@ -103,11 +103,7 @@ class RoughConductor(Conductor):
         return d
 
     def from_appearance(self, a: Appearance, base: dict[str, Value]) -> dict[str, Value]:
-        out: dict[str, Value] = {}
-        if a.distribution is not None:
-            out["distribution"] = a.distribution
-        if a.alpha is not None:
-            out["alpha"] = a.alpha
+        out = rough_start(a)
         out.update(super().from_appearance(a, base))
         if a.anisotropy > 0.0 and a.alpha is not None:
             au, av = alphas_from_anisotropy(a.alpha, a.anisotropy, a.rotation)

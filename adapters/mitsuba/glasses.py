@@ -9,7 +9,7 @@ from typing import Any
 from brdfremap.core.data.appearance import Appearance, as_rgb, dielectric_f0
 from brdfremap.core.data.schemas import LobeSpec, ParamSpec, Value
 
-from .model import EXT_IOR, MitsubaModel, alpha_of, mul, rgb
+from .model import EXT_IOR, MitsubaModel, alpha_of, mul, rgb, rough_start
 from .params import ALPHA, DISTRIBUTION, INT_IOR, SPEC_REFL
 
 
@@ -43,11 +43,7 @@ class RoughDielectric(Dielectric):
         return {**super().bsdf(p), "distribution": p["distribution"], "alpha": p["alpha"]}
 
     def from_appearance(self, a: Appearance, base: dict[str, Value]) -> dict[str, Value]:
-        out: dict[str, Value] = {}
-        if a.distribution is not None:
-            out["distribution"] = a.distribution
-        if a.alpha is not None:
-            out["alpha"] = a.alpha
+        out = rough_start(a)
         return {**out, **super().from_appearance(a, base)}
 
 

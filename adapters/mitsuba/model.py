@@ -24,6 +24,16 @@ def mul(a, b) -> tuple[float, float, float]:
     return tuple(float(x) * float(y) for x, y in zip(a, b))  # type: ignore[return-value]
 
 
+def rough_start(a) -> dict[str, Value]:
+    """A rough model's distribution and α for a neutral reading (`Appearance`), where it has them."""
+    out: dict[str, Value] = {}
+    if a.distribution is not None:
+        out["distribution"] = a.distribution
+    if a.alpha is not None:
+        out["alpha"] = a.alpha
+    return out
+
+
 def alpha_of(p: dict[str, Value]) -> float:
     """A rough model's α; a smooth one's lowest (`SMOOTH_ALPHA`)."""
     return float(p.get("alpha", SMOOTH_ALPHA))  # type: ignore[arg-type]

@@ -9,7 +9,7 @@ from brdfremap.core.data.appearance import Appearance, Kind, dielectric_f0
 from brdfremap.core.data.schemas import LobeSpec, ParamSpec, Value
 
 from .legacy import trim_notes
-from .model import EXT_IOR, MitsubaModel, alpha_of, mul, rgb
+from .model import EXT_IOR, MitsubaModel, alpha_of, mul, rgb, rough_start
 from .params import ALPHA, AS_ALPHA, BASE_COLOUR, DISTRIBUTION, INT_IOR, SPEC_REFL, lobes
 
 
@@ -43,11 +43,7 @@ class RoughPlastic(Plastic):
         return {**super().bsdf(p), "distribution": p["distribution"], "alpha": p["alpha"]}
 
     def from_appearance(self, a: Appearance, base: dict[str, Value]) -> dict[str, Value]:
-        out: dict[str, Value] = {}
-        if a.distribution is not None:
-            out["distribution"] = a.distribution
-        if a.alpha is not None:
-            out["alpha"] = a.alpha
+        out = rough_start(a)
         return {**out, **super().from_appearance(a, base)}
 
 
