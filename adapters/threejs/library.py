@@ -4,101 +4,20 @@ name, each on a sphere of its own in a row, so any viewer shows them), and a rea
 
 from __future__ import annotations
 
-import base64
 import json
-import math
 import urllib.parse
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from brdfremap.core.data.atomic import write_text_atomic
 from brdfremap.core.data.errors import ConfigError
-from brdfremap.core.data.schemas import Material, ModelSpec, Value
+from brdfremap.core.data.schemas import Material, Value
 from brdfremap.core.library.entries import Converted, Entry
-
-from brdfremap.core.data.textures import ColourSpace, Filter, Texture, TextureMap, mean_value, read_values, texture
+from brdfremap.core.data.textures import ColourSpace, Filter, Texture, mean_value, read_values, texture
 
 from . import gltf, images, textures
 from .models import MODELS
-
-RINGS, SEGMENTS = 64, 128
-SPACING = 2.5
-"""Spheres of radius 1, this far apart along +x."""
-
-
-def sphere_mesh(rings: int = RINGS, segments: int = SEGMENTS) -> dict[str, np.ndarray]:
-    """A UV sphere of radius 1, its pole along +y: positions, normals, the probe's texture coordinates
-    (`core.data.textures`: u = φ / 2π from +x, increasing away from a viewer on +z; v = θ / π from the
-    top pole), tangents along the latitudes (the probe's: anisotropy turns from them) and triangle
-    indices, counter-clockwise seen from outside."""
-    theta, phi = np.meshgrid(np.linspace(0.0, math.pi, rings + 1), np.linspace(0.0, 2.0 * math.pi, segments + 1),
-                             indexing="ij")
-    s, c = np.sin(theta), np.cos(theta)
-    pos = np.stack([s * np.cos(phi), c, -s * np.sin(phi)], axis=-1).reshape(-1, 3)
-    tangent = np.stack([-np.sin(phi), np.zeros_like(phi), -np.cos(phi)], axis=-1).reshape(-1, 3)  # d(pos)/d(phi)
-    uv = np.stack([phi / (2 * math.pi), theta / math.pi], axis=-1).reshape(-1, 2)
-    idx = []
-    for i in range(rings):
-        for j in range(segments):
-            a, b = i * (segments + 1) + j, (i + 1) * (segments + 1) + j
-            if i > 0:
-                idx += [a, b, a + 1]
-            if i < rings - 1:
-                idx += [a + 1, b, b + 1]
-    return {"POSITION": pos.astype(np.float32), "NORMAL": pos.astype(np.float32),
-            "TANGENT": np.concatenate([tangent, np.ones((pos.shape[0], 1))], axis=1).astype(np.float32),
-            "TEXCOORD_0": uv.astype(np.float32), "indices": np.asarray(idx, np.uint16)}
-
-
-def _mesh_parts(mesh: dict[str, np.ndarray]) -> tuple[bytes, list[dict], list[dict], dict[str, int], int]:
-    """The buffer's bytes, its views and accessors, each attribute's accessor, and the indices'."""
-    blob, views, accessors, attrs = b"", [], [], {}
-    kinds = {1: "SCALAR", 2: "VEC2", 3: "VEC3", 4: "VEC4"}
-    for name, arr in mesh.items():
-        data = arr.tobytes()
-        views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": len(data),
-                      "target": 34963 if name == "indices" else 34962})
-        acc: dict[str, Any] = {"bufferView": len(views) - 1, "componentType": 5123 if name == "indices" else 5126,
-                               "count": int(arr.shape[0]), "type": kinds[1 if arr.ndim == 1 else arr.shape[1]]}
-        if name == "POSITION":
-            acc.update(min=[float(x) for x in arr.min(axis=0)], max=[float(x) for x in arr.max(axis=0)])
-        accessors.append(acc)
-        attrs[name] = len(accessors) - 1
-        blob += data + b"\0" * (-len(data) % 4)
-    return blob, views, accessors, {k: v for k, v in attrs.items() if k != "indices"}, attrs["indices"]
-
-
-def sphere_document(materials: list[tuple[str, dict[str, Value]]], spec: ModelSpec,
-                    maps: list[dict[str, TextureMap]] | None = None) -> dict[str, Any]:
-    """A glTF document: each material (name, complete parameters) on a unit sphere of its own; with
-    ``maps`` (one dict a material, in their order), its inputs driven by them as glTF textures."""
-    maps = maps or [{} for _ in materials]
-    mats = [gltf.material(name, spec.complete(params), spec) for name, params in materials]
-    turned = [bool(m.get("extensions", {}).get("KHR_materials_anisotropy")) for m in mats]
-    mesh = {k: v for k, v in sphere_mesh().items()
-            if (k != "TEXCOORD_0" or any(maps)) and (k != "TANGENT" or any(turned))}
-    blob, views, accessors, attributes, indices = _mesh_parts(mesh)
-    def used(i: int) -> dict[str, int]:  # tangents only where anisotropy turns from them, UVs where a texture is
-        return {k: v for k, v in attributes.items() if (k != "TANGENT" or turned[i]) and (k != "TEXCOORD_0" or maps[i])}
-
-    doc: dict[str, Any] = {
-        "asset": {"version": "2.0", "generator": gltf.GENERATOR},
-        "scene": 0, "scenes": [{"nodes": list(range(len(mats)))}],
-        "nodes": [{"name": m["name"], "mesh": i, "translation": [SPACING * i, 0.0, 0.0]} for i, m in enumerate(mats)],
-        "meshes": [{"name": m["name"], "primitives": [{"attributes": used(i), "indices": indices, "material": i}]}
-                   for i, m in enumerate(mats)],
-        "materials": mats, "accessors": accessors, "bufferViews": views,
-        "buffers": [{"byteLength": len(blob),
-                     "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}]}
-    for mat, m in zip(mats, maps):
-        if m:
-            textures.embed(doc, mat, m)
-    used = gltf.extensions_used(mats)
-    if used:
-        doc["extensionsUsed"] = used
-    return doc
+from .spheres import sphere_document
 
 
 def material_document(doc: dict[str, Any], index: int) -> dict[str, Any]:
@@ -143,7 +62,7 @@ def _texture_refs(node: Any) -> list[dict[str, Any]]:
 class GltfLibraryWriter:
     name = "glTF 2.0 library (library.gltf)"
     adapter = "threejs"
-    models: tuple[str, ...] = ()
+    models: tuple[str, ...] = ("gltf_pbr",)
 
     def write(self, folder: Path, items: list[Converted]) -> list[Path]:
         spec = MODELS["gltf_pbr"]

@@ -233,7 +233,7 @@ def _srgb8(v: float) -> float:
 
 
 def test_the_written_sphere_has_the_probes_texture_coordinates_and_tangents():
-    from brdfremap.adapters.threejs.library import sphere_mesh
+    from brdfremap.core.data.sphere import sphere_mesh
 
     m = sphere_mesh()
     pos, uv, tangent = m["POSITION"], m["TEXCOORD_0"], m["TANGENT"]
