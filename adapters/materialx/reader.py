@@ -5,6 +5,7 @@ read as the Cycles Principled BSDF by the correspondence in `correspondence.py`.
 
 from __future__ import annotations
 
+import functools
 import re
 from pathlib import Path
 
@@ -28,7 +29,10 @@ def mx():
     return MaterialX
 
 
+@functools.cache
 def standard_libraries():
+    """MaterialX's standard libraries, loaded once (about 0.3 s): callers import them into their own
+    documents and never change this one."""
     m = mx()
     lib = m.createDocument()
     m.loadLibraries(m.getDefaultDataLibraryFolders(), m.getDefaultDataSearchPath(), lib)
@@ -55,28 +59,33 @@ class MaterialXReader:
         if not valid:
             first = why.strip().splitlines()[0]
             raise ConfigError(f"is not valid MaterialX: {first}", file=str(path), field=_line_of(path, first))
-        return [self._entry(m, mat, str(path), upgraded) for mat in doc.getMaterialNodes()]
+        return [material_entry(m, mat, str(path), upgraded) for mat in doc.getMaterialNodes()]
 
-    def _entry(self, m, mat, file: str, upgraded: dict[str, list[str]]) -> Entry:
-        name = mat.getName()
-        shaders = [s for s in m.getShaderNodes(mat) if s.getType() == "surfaceshader"]
-        if not shaders:
-            return Entry(name=name, file=file, problem="no surface shader")
-        shader = shaders[0]
-        category = shader.getCategory()
-        if category not in TO_PRINCIPLED:
-            return Entry(name=name, file=file, problem=f"shader {category!r} has no correspondence here (known: "
-                                                        f"{', '.join(TO_PRINCIPLED)})")
-        try:
-            params, textured, notes = _principled(shader, category)
-        except ConfigError as exc:  # one material's value (an unknown colour space): that material, not the file
-            return Entry(name=name, file=file, problem=str(exc))
-        notes[:0] = [NOTE.format(shader=category), *upgraded.get(shader.getName(), [])]
-        textures = _textures(shader, category, name, notes)
-        params.update(_means(textures, name, notes))
-        return Entry(name=name, file=file, notes=notes, textured=textured,
-                     material=Material(adapter="cycles", model="principled", params=params, name=name,
-                                       textures=textures))
+
+def material_entry(m, mat, file: str, upgraded: dict[str, list[str]] | None = None, name: str = "") -> Entry:
+    """One material node of a document (its surface shader by the correspondence), as an entry;
+    ``upgraded``: notes on a shader's inputs an upgrade renamed. Also how a MaterialX shader written
+    directly in USD is read (`adapters/usd`)."""
+    upgraded = upgraded or {}
+    name = name or mat.getName()
+    shaders = [s for s in m.getShaderNodes(mat) if s.getType() == "surfaceshader"]
+    if not shaders:
+        return Entry(name=name, file=file, problem="no surface shader")
+    shader = shaders[0]
+    category = shader.getCategory()
+    if category not in TO_PRINCIPLED:
+        return Entry(name=name, file=file, problem=f"shader {category!r} has no correspondence here (known: "
+                                                    f"{', '.join(TO_PRINCIPLED)})")
+    try:
+        params, textured, notes = _principled(shader, category)
+    except ConfigError as exc:  # one material's value (an unknown colour space): that material, not the file
+        return Entry(name=name, file=file, problem=str(exc))
+    notes[:0] = [NOTE.format(shader=category), *upgraded.get(shader.getName(), [])]
+    textures = _textures(shader, category, name, notes)
+    params.update(_means(textures, name, notes))
+    return Entry(name=name, file=file, notes=notes, textured=textured,
+                 material=Material(adapter="cycles", model="principled", params=params, name=name,
+                                   textures=textures))
 
 
 def _principled(shader, category: str) -> tuple[dict, list[str], list[str]]:
