@@ -17,7 +17,6 @@ from typing import Any
 import numpy as np
 
 from brdfremap.core.data.appearance import Appearance, Kind, conductor_f0
-from brdfremap.core.data.atomic import write_text_atomic
 from brdfremap.core.data.environment import radiance
 from brdfremap.core.data.scene import EnvironmentLight, PointLight, ProbeScene
 from brdfremap.core.data.schemas import Value
@@ -25,10 +24,7 @@ from brdfremap.core.data.textures import Texture, TextureMap
 from brdfremap.core.host.model import Model
 from brdfremap.core.host.protocol import Adapter, ModelChoice, check_image
 
-from . import gltf
-from . import textures as _textures
 from .browser import THREE, WEB, Page, chromium
-from .library import sphere_document
 from .models import MODELS
 
 MAX_TARGET = 8192
@@ -113,25 +109,35 @@ class ThreeJsAdapter(Adapter):
         model = self.as_model(model)
         if lobe is not None:
             raise ValueError(f"threejs: model {model.name!r} has no lobes to render alone")
-        return self.render_document(gltf.document(params, model), scene)
+        return self.render_request(model.page_material(params), scene)
 
     def render_textured(self, model: Model | str, params: dict[str, Value], maps: dict[str, TextureMap],
                         scene: ProbeScene) -> np.ndarray:
         """The maps as the glTF textures `write_native` writes (8-bit PNGs in the document), read by
         GLTFLoader, on a sphere of the probe's texture coordinates."""
         model = self.as_model(model)
-        return self.render_document(gltf.document(model.complete(params), model, maps=maps), scene)
+        return self.render_request(model.page_material(model.complete(params), maps), scene)
 
     def render_document(self, doc: dict[str, Any], scene: ProbeScene) -> np.ndarray:
         """The first material of a glTF document, as three.js's GLTFLoader reads it, on the probe
-        sphere (every render goes this way: a `.gltf` this tool writes renders as its fit did). A
-        textured material's sphere has the probe's texture coordinates (`core.data.textures`)."""
+        sphere (a `.gltf` this tool writes renders as its fit did)."""
+        return self.render_request({"material": doc}, scene)
+
+    def render_layer(self, usda: str, scene: ProbeScene) -> np.ndarray:
+        """The first mesh's material of a USD layer (text), as three.js's USDLoader reads it, on the
+        probe sphere."""
+        return self.render_request({"usda": usda}, scene)
+
+    def render_request(self, material: dict[str, Any], scene: ProbeScene) -> np.ndarray:
+        """A material in the form its model's loader reads (`page_material`: a glTF document or a USD
+        layer) on the probe sphere: every render goes this way. A textured material's sphere has the
+        probe's texture coordinates (`core.data.textures`)."""
         views = [{"camera": self._camera(view.camera), "lights": [self._light(x) for x in view.lights]}
                  for view in scene.all_views()]
         request = {"resolution": scene.resolution, "supersample": SUPERSAMPLE,
                    "sphere": {"center": list(scene.sphere.center), "radius": scene.sphere.radius,
-                              "textured": bool(doc.get("textures"))},
-                   "views": views, "material": doc}
+                              "textured": bool(material.get("material", {}).get("textures"))},
+                   "views": views, **material}
         self.renders += 1
         img = self.page.render(request, len(views))
         return img if scene.views else check_image(img, scene, "threejs")
@@ -158,12 +164,9 @@ class ThreeJsAdapter(Adapter):
 
     def write_native(self, model: Model | str, params: dict[str, Value], out_dir: Path,
                      textures: dict[str, Texture] | None = None) -> list[Path]:
-        """`material.gltf`: the material on a sphere; ``textures`` (files in ``out_dir``) embedded as
-        glTF textures."""
-        spec = self.as_model(model)
-        maps = _textures.maps_from_files(Path(out_dir), textures, _textures.kinds(spec)) if textures else {}
-        doc = sphere_document([("brdf-remap", params)], spec, [maps])
-        return [write_text_atomic(Path(out_dir) / "material.gltf", json.dumps(doc, indent=1) + "\n")]
+        """The model's native file (`material.gltf`, `material.usda`): the material on a sphere;
+        ``textures`` (files in ``out_dir``) with it."""
+        return [self.as_model(model).write_native(params, Path(out_dir), textures)]
 
     def close(self) -> None:
         self.page.shutdown()

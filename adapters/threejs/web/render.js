@@ -4,6 +4,7 @@
 // PMREM, rendered into a float render target: linear radiance, no tone mapping, no output transform.
 import * as THREE from "three";
 import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
+import { USDLoader } from "three/addons/loaders/USDLoader.js";
 
 const canvas = document.createElement("canvas");
 document.body.appendChild(canvas);
@@ -16,6 +17,7 @@ const gl = renderer.getContext();
 const floatTargets = !!gl.getExtension("EXT_color_buffer_float");
 const pmrem = new THREE.PMREMGenerator(renderer);
 const loader = new GLTFLoader();
+const usdLoader = new USDLoader();
 const environments = new Map();
 const spheres = new Map();
 const targets = new Map();
@@ -85,6 +87,16 @@ async function material(doc) {
   return gltf.parser.getDependency("material", 0);
 }
 
+// The material of a USD layer's first mesh, as three.js's own USDLoader reads it (a UsdPreviewSurface
+// into MeshPhysicalMaterial), the layer's geometry dropped.
+async function usdMaterial(text) {
+  const group = await new Promise((resolve, reject) => usdLoader.parse(text, "", resolve, reject));
+  let found = null;
+  group.traverse((o) => { if (o.isMesh) { if (!found) found = o.material; o.geometry.dispose(); } });
+  if (!found) throw new Error("three.js's USDLoader found no mesh with a material in the layer");
+  return found;
+}
+
 function renderView(mesh, view, n) {
   const scene = new THREE.Scene();
   scene.background = new THREE.Color(0, 0, 0);
@@ -134,7 +146,7 @@ function downsample(pixels, r, ss, out, offset) {
 async function render(req) {
   if (lost) throw new Error("the WebGL context was lost");
   const t0 = performance.now();
-  const mat = await material(req.material);
+  const mat = req.usda !== undefined ? await usdMaterial(req.usda) : await material(req.material);
   const mesh = new THREE.Mesh(sphere(req.sphere.radius, !!req.sphere.textured), mat);
   mesh.position.set(...req.sphere.center);
   const r = req.resolution, ss = req.supersample;
