@@ -18,6 +18,9 @@ from .textures import read_texture
 QUIET = {"normal", "displacement", "occlusion", "opacityMode", "opacityThreshold"}
 """Inputs that say nothing about a smooth sphere's reflection: listed only when driven or set away
 from their defaults (`_away`)."""
+INVISIBLE = ("opacity 0: UsdPreviewSurface's consumers draw it fully transparent (three.js's USDLoader and "
+             "Blender's importer blend by alpha; the specification has no transmission), so there is nothing to "
+             "match; remap the stage's MaterialX/OpenPBR surface of it where it has one")
 LINEAR = {"", "lin_rec709", "lin_srgb", "raw", "Raw", "linear", "scene-linear Rec.709-sRGB"}
 
 
@@ -62,6 +65,8 @@ def read_preview(shader, name: str, file: str, spec) -> Entry:
         notes += clip_into(spec, params)
     except ConfigError as exc:
         return Entry(name=name, file=file, problem=str(exc))
+    if float(params.get("opacity", 1.0)) <= 0.0:
+        return Entry(name=name, file=file, problem=INVISIBLE)
     notes += _others(shader, defaults, name)
     if not any(shader.GetInput(i) and shader.GetInput(i).GetAttr().HasAuthoredValue() for i in INPUTS.values()):
         notes.append("none of its inputs is authored here: the specification's defaults")

@@ -94,3 +94,42 @@ def test_the_whole_corpus_converts_as_a_user_would(corpus, tmp_path, kind, to):
     assert summary["converted"] >= {"mitsuba": 110, "materialx": 55}[kind]
     assert not [m for m in summary["materials"] if m["status"] == "failed"]
     _check(tmp_path / "out", summary)
+
+
+BALL = ROOT / "tests" / "data" / "usd" / "StandardShaderBall"
+"""The USD Working Group's StandardShaderBall stage, its material layers (SOURCE.md: the ball's
+3.3 MB mesh layer and its geometry are not copied, so the stage names two layers it cannot load)."""
+
+
+def test_the_usd_shader_ball_is_read_every_material_or_a_one_line_reason():
+    formats = collect_formats()
+    for stage in ("standard_shader_ball_scene.usda", "standard_shader_ball_scene_openpbr.usda"):
+        entries = read_all(expand_inputs([str(BALL / stage)], formats), formats, keep_going=True)
+        assert all("\n" not in e.problem for e in entries)
+        layers = [e.problem for e in entries if e.unreadable]
+        assert len(layers) == 2, layers  # the two layers not copied, one line each
+        assert sum("shaderball.usda" in p for p in layers) == 1 and sum("subdiv.usda" in p for p in layers) == 1
+        listed = {e.name: e.problem for e in entries if e.material is None and not e.unreadable}
+        assert list(listed) == ["glass [example_material=usdpreview_glass]"], listed
+        assert listed["glass [example_material=usdpreview_glass]"].startswith("opacity 0: ")  # drawn invisible
+        models = {e.name: f"{e.material.adapter}:{e.material.model}" for e in entries if e.material is not None}
+        assert len(models) == 27, models  # 7 room, 3 UsdPreviewSurface, 4 OpenPBR .mtlx, and what variants change
+        assert models["copper [example_material=usdpreview_copper]"] == "threejs:usd_preview_surface"
+        assert models["gold"] == models["gold [material_model=standard_surface]"] == "cycles:principled"
+
+
+def test_the_usd_shader_ball_converts_and_its_library_usda_reopens(tmp_path, cycles_adapter, mitsuba_adapter):
+    from pxr import Usd, UsdShade
+
+    stage = str(BALL / "standard_shader_ball_scene.usda")
+    wanted = {"cycles": ["copper [example_material=usdpreview_copper]", "gold", "box_base"],
+              "mitsuba": ["plastic [example_material=usdpreview_plastic]", "bubblegum [material_model=standard_surface]"]}
+    for to, names in wanted.items():
+        out = tmp_path / to
+        run, summary = _convert([stage], to, out, *FAST, *[a for n in names for a in ("--only", n)])
+        assert run.returncode == 0, summary
+        assert {m["name"] for m in summary["materials"]} == set(names)
+        assert {m["status"] for m in summary["materials"]} <= {"ok", "mismatch", "unreliable"}, summary
+        _check(out, summary)
+        written = Usd.Stage.Open(str(out / "library.usda"))
+        assert sum(p.IsA(UsdShade.Material) for p in written.Traverse()) == len(names)
