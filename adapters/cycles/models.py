@@ -130,6 +130,8 @@ class Principled(CyclesModel):
     def from_appearance(self, a: Appearance, base: dict[str, Value]) -> dict[str, Value]:
         metal = a.kind == Kind.CONDUCTOR
         out = self._common(a)
+        if a.multiscatter and out.get("distribution") == "ggx":
+            out["distribution"] = "multi_ggx"  # the energy of multiple scattering kept, as the source keeps it
         out.update(base_color=a.specular if metal else a.opaque_base(), metallic=1.0 if metal else 0.0)
         if a.edge_tint() is not None:
             out["specular_tint"] = a.edge_tint()  # a complex IOR's edge, as Blender's F82 tint renders it

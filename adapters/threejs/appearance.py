@@ -38,17 +38,19 @@ def gltf_anisotropy(alpha: float, a: float) -> tuple[float, float]:
 
 
 def appearance(p: dict[str, Value]) -> Appearance:
-    """How an exporter reads this glTF material (GGX, as glTF's BRDF is): an anisotropic one's α is
-    the geometric mean of its two."""
+    """How an exporter reads this glTF material (GGX, as glTF's BRDF is, with the energy of multiple
+    scattering three.js's MeshPhysicalMaterial compensates): an anisotropic one's α is the geometric
+    mean of its two."""
     along, across = gltf_alphas(float(p["roughness"]), float(p["anisotropy"]))  # type: ignore[arg-type]
     alpha = max(math.sqrt(along * across), 1e-4)
     base, m = as_rgb(p["base_color"]), float(p["metallic"])  # type: ignore[arg-type]
     extra = _layers(p)
     if m >= 0.5:
-        return Appearance(kind=Kind.CONDUCTOR, alpha=alpha, distribution="ggx", specular=base, **extra)
+        return Appearance(kind=Kind.CONDUCTOR, alpha=alpha, distribution="ggx", multiscatter=True, specular=base,
+                          **extra)
     f0 = min(dielectric_f0(float(p["ior"])) * float(p["specular"]), 1.0)  # type: ignore[arg-type]
     opaque = (1.0 - m) * (1.0 - extra["transmission"])
-    return Appearance(kind=Kind.DIELECTRIC, alpha=alpha, distribution="ggx", specular=(f0,) * 3,
+    return Appearance(kind=Kind.DIELECTRIC, alpha=alpha, distribution="ggx", multiscatter=True, specular=(f0,) * 3,
                       diffuse=tuple(c * opaque for c in base), ior=float(p["ior"]) if extra["transmission"] > 0  # type: ignore
                       else ior_from_f0(f0), **extra)
 

@@ -53,6 +53,7 @@ class UsdPreview(preview.UsdPreviewSurface):
         metallic workflow, and specularColor tinting the IOR's reflectance (MeshPhysicalMaterial's
         specularColor), not replacing it as the specification's specular workflow does."""
         a = super().appearance({**params, "use_specular_workflow": "metallic"})
+        a = a.model_copy(update={"multiscatter": True})  # three.js's energy compensation, as glTF's (appearance.py)
         if params.get("use_specular_workflow") != "specular" or a.kind == Kind.CONDUCTOR:
             return a
         tint = as_rgb(params["specular_color"])

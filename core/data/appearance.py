@@ -62,6 +62,10 @@ class Appearance(_Strict):
         description="A metal (coloured specular, no diffuse) or a dielectric (diffuse base, white specular).")
     alpha: float | None = Field(None, gt=0.0, description="Microfacet α of the specular lobe; None: no specular lobe.")
     distribution: Literal["beckmann", "ggx"] | None = Field(None, description="Microfacet distribution, if one.")
+    multiscatter: bool = Field(False, description="The specular lobe keeps the energy its microfacets' multiple "
+                                                  "scattering returns (Cycles' Multiscatter GGX; three.js's energy "
+                                                  "compensation): a rough metal brighter and more saturated than "
+                                                  "single scattering makes it.")
     specular: RGB = Field((0.0, 0.0, 0.0), description="Normal-incidence reflectance F0 of the specular lobe.")
     diffuse: RGB = Field((0.0, 0.0, 0.0), description="Albedo of the diffuse lobe.")
     ior: float | None = Field(None, gt=0.0, description="A dielectric's index of refraction (in air).")
