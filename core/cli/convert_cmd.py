@@ -24,6 +24,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--table", action="append", default=[], metavar="TABLE",
                    help="a remap table (`remap table build`) through which textured materials of its source model "
                         "are remapped texel by texel (repeatable; without one, a texture's constant is used)")
+    p.add_argument("--events", metavar="FILE",
+                   help="also write each finished material as one JSON line to FILE (done, of, title, status, "
+                        "error), for a program that follows the run: the Blender extension's progress bar")
     options.add_scene(p)
     options.add_settings(p)
     options.add_workers(p)
@@ -54,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
     tables = [_table(t) for t in args.table]
     with workers(args.jobs, args.scheduler) as w, adapter_pool(registry) as adapters:
         result = convert(entries, dest, args.out, registry, formats, w, adapters, scene=scene, settings=settings,
-                         quiet=args.quiet, tables=tables)
+                         quiet=args.quiet, tables=tables, events=args.events)
     _print(result, args.out)
     return EXIT_SOME_FAILED if result.failed else 0
 

@@ -9,6 +9,7 @@ only the unfinished materials run; change an input and only what changed runs ag
 from __future__ import annotations
 
 import hashlib
+import json
 import re
 import time
 from dataclasses import dataclass, field
@@ -244,7 +245,7 @@ def model_task(item: Item, slot: str, adapter: str, model: str, fix: dict, title
 
 def convert(entries: list[Entry], dest: Destination, out: str | Path, registry: AdapterRegistry, formats: Formats,
             workers: Workers, adapters: AdapterPool, *, scene: ProbeScene, settings: Settings,
-            quiet: bool = False, tables: list[TableUse] = ()) -> Conversion:
+            quiet: bool = False, tables: list[TableUse] = (), events: str | Path | None = None) -> Conversion:
     from .html import write_index
 
     t0 = time.perf_counter()
@@ -252,7 +253,7 @@ def convert(entries: list[Entry], dest: Destination, out: str | Path, registry: 
     with owned(out) as folder:
         runnable = [i for i in items if i.task is not None]
         runner = Runner(Store(folder / "materials"), workers, adapters,
-                        quiet=quiet, stop_on_error=False, line=_line)
+                        quiet=quiet, stop_on_error=False, line=_line if events is None else _recorded(Path(events)))
         for item, done in zip(runnable, runner.run([i.task for i in runnable])):
             item.done = done
         second = [] if dest.model is not None else retries(
@@ -339,6 +340,26 @@ class NativeFiles:
             except OSError as exc:
                 raise ConfigError(f"cannot gather the native files: {exc.strerror or exc}", file=str(dest)) from None
         return [folder / "native"] if out else []
+
+
+def _recorded(path: Path):
+    """`_line`, each finished job also appended to ``path`` as one JSON line (done, of, title, status,
+    error); the file is started empty."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text("")
+    except OSError as exc:
+        raise ConfigError(f"cannot write the events file: {exc.strerror or exc}", field="--events") from None
+
+    def line(done: Done, i: int, n: int) -> str:
+        r = done.report
+        event = {"done": i, "of": n, "title": done.task.title, "status": r.verdict if r else "failed",
+                 "error": r.metrics.relative_rmse if r else None}
+        with path.open("a", encoding="utf-8") as f:
+            f.write(json.dumps(event) + "\n")
+        return _line(done, i, n)
+
+    return line
 
 
 def _line(done: Done, i: int, n: int) -> str:
