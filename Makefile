@@ -15,7 +15,7 @@ PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed-stamp
 LLVM19 := /usr/lib/x86_64-linux-gnu/libLLVM.so.19.1
 
-.PHONY: demo test test-all system-deps clean
+.PHONY: demo test test-all extension system-deps clean
 
 $(STAMP): pyproject.toml
 	@command -v $(PYTHON) >/dev/null || { echo "needs $(PYTHON) (the bpy wheels are built for Python 3.11)"; exit 1; }
@@ -54,5 +54,8 @@ test: system-deps $(STAMP) $(THREE)
 test-all: system-deps $(STAMP) $(THREE)
 	$(PY) -m pytest --run-slow
 
+extension: $(STAMP)   # the Blender extension's installable zip, built and validated by Blender's own tool
+	$(PY) extension/build.py --out dist
+
 clean:
-	rm -rf out .pytest_cache
+	rm -rf out dist .pytest_cache

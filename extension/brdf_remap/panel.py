@@ -1,0 +1,80 @@
+"""The panel in the material properties: the operators, the conversion under way, and each result's
+verdict, error and images (source, remap, error), with Accept, Discard and the full report."""
+
+from __future__ import annotations
+
+import bpy
+import bpy.utils.previews
+
+from . import work
+
+_previews = None
+
+
+def _icon(path) -> int:
+    """The image as an icon of the panel (loaded once a path)."""
+    key = str(path)
+    if key not in _previews:
+        _previews.load(key, key, "IMAGE")
+    return _previews[key].icon_id
+
+
+class BRDFREMAP_PT_material(bpy.types.Panel):
+    bl_label = "brdf-remap"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "material"
+
+    def draw(self, context):
+        layout, session = self.layout, work.SESSION
+        self._tool(layout, context)
+        col = layout.column(align=True)
+        row = col.row(align=True)
+        row.operator_menu_enum("brdf_remap.remap", "model", text="Remap to")
+        row.operator_menu_enum("brdf_remap.export", "target", text="Export matched")
+        col.operator("brdf_remap.import_matched", icon="IMPORT")
+        if session.job is not None:
+            done, of, _ = session.progress()
+            layout.label(text=f"Running: {done}/{of or '?'}", icon="TIME")
+            layout.operator("brdf_remap.cancel", icon="CANCEL")
+        if session.message:
+            layout.label(text=session.message, icon="INFO")
+        for r in session.rows:
+            self._row(layout, r)
+        if session.pending:
+            row = layout.row(align=True)
+            row.operator("brdf_remap.accept", icon="CHECKMARK")
+            row.operator("brdf_remap.discard", icon="X")
+        if session.out is not None:
+            layout.operator("brdf_remap.report", icon="URL")
+
+    @staticmethod
+    def _tool(layout, context) -> None:
+        from .operators import prefs
+
+        p = prefs(context)
+        found = work.SESSION.checked.get(p.python if p is not None else "")
+        if isinstance(found, str):
+            layout.label(text=found, icon="ERROR")
+
+    @staticmethod
+    def _row(layout, r) -> None:
+        box = layout.box()
+        box.label(text=f"{r.name}: {r.line()}", icon="MATERIAL")
+        images = r.images()
+        if images:
+            grid = box.grid_flow(columns=len(images), align=True)
+            for path in images:
+                grid.template_icon(icon_value=_icon(path), scale=5.0)
+
+
+def register() -> None:
+    global _previews
+    _previews = bpy.utils.previews.new()
+
+
+def unregister() -> None:
+    global _previews
+    if _previews is not None:
+        bpy.utils.previews.remove(_previews)
+        _previews = None
