@@ -24,7 +24,7 @@ class BRDFREMAP_preferences(bpy.types.AddonPreferences):
         self.layout.prop(self, "quality")
 
 
-CLASSES = (BRDFREMAP_preferences, *operators.CLASSES, panel.BRDFREMAP_PT_material)
+CLASSES = (BRDFREMAP_preferences, *operators.CLASSES, *panel.CLASSES)
 
 
 def register() -> None:

@@ -19,6 +19,34 @@ def _icon(path) -> int:
     return _previews[key].icon_id
 
 
+class _RemapMenu:
+    in_place = False
+
+    def draw(self, context):
+        scope = context.window_manager.brdf_remap_scope
+        for model, label in work.MODELS:
+            op = self.layout.operator("brdf_remap.remap", text=label)
+            op.model, op.scope, op.in_place = model, scope, self.in_place
+
+
+class BRDFREMAP_MT_remap_copy(_RemapMenu, bpy.types.Menu):
+    bl_label = "Remap as a copy"
+
+
+class BRDFREMAP_MT_remap_in_place(_RemapMenu, bpy.types.Menu):
+    bl_label = "Remap in place"
+    in_place = True
+
+
+class BRDFREMAP_MT_export(bpy.types.Menu):
+    bl_label = "Export matched"
+
+    def draw(self, context):
+        for key, export in work.EXPORTS.items():
+            op = self.layout.operator("brdf_remap.export", text=export.label)
+            op.target, op.scope = key, context.window_manager.brdf_remap_scope
+
+
 class BRDFREMAP_PT_material(bpy.types.Panel):
     bl_label = "brdf-remap"
     bl_space_type = "PROPERTIES"
@@ -27,12 +55,15 @@ class BRDFREMAP_PT_material(bpy.types.Panel):
 
     def draw(self, context):
         layout, session = self.layout, work.SESSION
-        self._tool(layout, context)
+        _tool(layout, context)
+        layout.row().prop(context.window_manager, "brdf_remap_scope", expand=True)
         col = layout.column(align=True)
         row = col.row(align=True)
-        row.operator_menu_enum("brdf_remap.remap", "model", text="Remap to")
-        row.operator_menu_enum("brdf_remap.export", "target", text="Export matched")
-        col.operator("brdf_remap.import_matched", icon="IMPORT")
+        row.menu("BRDFREMAP_MT_remap_copy")
+        row.menu("BRDFREMAP_MT_remap_in_place")
+        row = col.row(align=True)
+        row.menu("BRDFREMAP_MT_export", icon="EXPORT")
+        row.operator("brdf_remap.import_matched", icon="IMPORT")
         if session.job is not None:
             done, of, _ = session.progress()
             layout.label(text=f"Running: {done}/{of or '?'}", icon="TIME")
@@ -40,7 +71,7 @@ class BRDFREMAP_PT_material(bpy.types.Panel):
         if session.message:
             layout.label(text=session.message, icon="INFO")
         for r in session.rows:
-            self._row(layout, r)
+            _row(layout, r)
         if session.pending:
             row = layout.row(align=True)
             row.operator("brdf_remap.accept", icon="CHECKMARK")
@@ -48,33 +79,40 @@ class BRDFREMAP_PT_material(bpy.types.Panel):
         if session.out is not None:
             layout.operator("brdf_remap.report", icon="URL")
 
-    @staticmethod
-    def _tool(layout, context) -> None:
-        from .operators import prefs
 
-        p = prefs(context)
-        found = work.SESSION.checked.get(p.python if p is not None else "")
-        if isinstance(found, str):
-            layout.label(text=found, icon="ERROR")
+def _tool(layout, context) -> None:
+    from .operators import prefs
 
-    @staticmethod
-    def _row(layout, r) -> None:
-        box = layout.box()
-        box.label(text=f"{r.name}: {r.line()}", icon="MATERIAL")
-        images = r.images()
-        if images:
-            grid = box.grid_flow(columns=len(images), align=True)
-            for path in images:
-                grid.template_icon(icon_value=_icon(path), scale=5.0)
+    p = prefs(context)
+    found = work.SESSION.checked.get(p.python if p is not None else "")
+    if isinstance(found, str):
+        layout.label(text=found, icon="ERROR")
+
+
+def _row(layout, r) -> None:
+    box = layout.box()
+    box.label(text=f"{r.name}: {r.line()}", icon="MATERIAL")
+    images = r.images()
+    if images:
+        grid = box.grid_flow(columns=len(images), align=True)
+        for path in images:
+            grid.template_icon(icon_value=_icon(path), scale=5.0)
+
+
+CLASSES = (BRDFREMAP_MT_remap_copy, BRDFREMAP_MT_remap_in_place, BRDFREMAP_MT_export, BRDFREMAP_PT_material)
 
 
 def register() -> None:
     global _previews
+    from .operators import SCOPES
+
     _previews = bpy.utils.previews.new()
+    bpy.types.WindowManager.brdf_remap_scope = bpy.props.EnumProperty(name="Materials", items=SCOPES)
 
 
 def unregister() -> None:
     global _previews
+    del bpy.types.WindowManager.brdf_remap_scope
     if _previews is not None:
         bpy.utils.previews.remove(_previews)
         _previews = None

@@ -81,6 +81,13 @@ def test_every_operator_works_headless_on_real_files(extension_zip, tmp_path, co
         assert all(after[m]["bsdf"] in ("BSDF_PRINCIPLED", "BSDF_METALLIC", "BSDF_GLOSSY", "BSDF_DIFFUSE")
                    for m in added), after
 
+    drawn = log["panel"]  # what the material panel lays out after the MaterialX import
+    assert {"prop: brdf_remap_scope", "menu: Remap as a copy", "menu: Remap in place", "menu: Export matched",
+            "operator: brdf_remap.import_matched", "operator: brdf_remap.report"} <= set(drawn), drawn
+    assert "label: Copper: " + log["accept mtlx"]["panel"][1].split(": ", 1)[1] in drawn
+    assert drawn.count("image") == 3  # its source, remap and error side by side
+    assert [[p.rsplit("/", 1)[1] for p in r] for r in log["images"]] == [["source.png", "target.png", "error.png"]]
+
     missing = log["no tool"]
     assert missing["result"] == ["CANCELLED"]
     assert "no-such-python" in missing["panel"][0] and "preferences" in missing["panel"][0]  # above the last results

@@ -68,6 +68,45 @@ def step(log: dict, name: str, call) -> None:
     log[name] = {"result": result, "error": error, "panel": work.SESSION.lines(), "materials": surfaces()}
 
 
+class Layout:
+    """Records what the panel's draw() lays out (no window here to draw it in): its text, the
+    operators and menus it offers, and the images it shows."""
+
+    def __init__(self, out: list):
+        self.out = out
+
+    def row(self, **kw):
+        return self
+
+    column = box = row
+
+    def grid_flow(self, **kw):
+        return self
+
+    def label(self, text="", icon="NONE"):
+        self.out.append(f"label: {text}")
+
+    def operator(self, idname, text="", icon="NONE"):
+        self.out.append(f"operator: {idname}")
+        return type("Properties", (), {})()
+
+    def menu(self, idname, text="", icon="NONE"):
+        self.out.append(f"menu: {getattr(bpy.types, idname).bl_label}")
+
+    def prop(self, data, name, **kw):
+        self.out.append(f"prop: {name}")
+
+    def template_icon(self, icon_value=0, scale=1.0):
+        self.out.append("image")  # its icon id is 0 here: without a window no preview is made
+
+
+def panel() -> list[str]:
+    out: list[str] = []
+    cls = bpy.types.BRDFREMAP_PT_material
+    cls.draw(type("Panel", (), {"layout": Layout(out)})(), bpy.context)
+    return out
+
+
 def main() -> None:
     zip_path, folder, python, mitsuba, mtlx = sys.argv[-5:]
     folder = Path(folder)
@@ -94,6 +133,8 @@ def main() -> None:
     for name, file in (("mitsuba", mitsuba), ("mtlx", mtlx)):
         step(log, f"import {name}", lambda: bpy.ops.brdf_remap.import_matched(filepath=file))
         step(log, f"accept {name}", bpy.ops.brdf_remap.accept)
+    log["panel"] = panel()
+    log["images"] = [[str(p) for p in r.images()] for r in work.SESSION.rows]
     prefs.python = str(folder / "no-such-python")
     step(log, "no tool", lambda: bpy.ops.brdf_remap.remap(model="metallic", scope="ALL"))
     log["cancel"] = cancelled(work, python, folder)
