@@ -125,7 +125,8 @@ class Principled(CyclesModel):
     vector_inputs = ("subsurface_radius",)
 
     def appearance(self, p: dict[str, Value]) -> Appearance:
-        return _principled(p, self._alpha(p), self._dist(p))
+        a = _principled(p, self._alpha(p), self._dist(p))
+        return a.model_copy(update={"multiscatter": True}) if p.get("distribution") == "multi_ggx" else a
 
     def from_appearance(self, a: Appearance, base: dict[str, Value]) -> dict[str, Value]:
         metal = a.kind == Kind.CONDUCTOR

@@ -180,10 +180,11 @@ def resolve(job: Job, registry: AdapterRegistry, where: Where = Where(),
     fixed = {k: given[k] for k in fix}
     base = tgt_spec.complete({})
     if (src.adapter, src.model) == (tgt.adapter, tgt.model):
-        # Same model: discrete choices (distribution, material preset) carry over unless fixed.
-        for p in tgt_spec.parameters:
-            if p.kind == ParamKind.CHOICE:
-                base[p.name] = src_params[p.name]
+        # Same model: what the fit does not vary carries over unless fixed: discrete choices
+        # (distribution, material preset) and the held values a neutral reading has no word for (a
+        # Principled BSDF's subsurface), which the target would otherwise render at its defaults.
+        base.update({p.name: src_params[p.name] for p in tgt_spec.parameters
+                     if p.kind == ParamKind.CHOICE or not p.fit})
     base.update(fixed)
     if job.lookup is not None:
         looked = {k: v for k, v in job.lookup.params.items() if k not in fixed}
