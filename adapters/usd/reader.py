@@ -89,7 +89,10 @@ def _mtlx_entries(ref, file: str) -> list[Entry]:
         entries = MaterialXReader().read(ref.file)
     except ConfigError as exc:
         return [Entry(name=shown, file=file, problem=str(exc), unreadable=True)]
-    wanted = ref.target.rstrip("/").rsplit("/", 1)[-1] if ref.target.count("/") > 2 else ""
+    from pxr import Sdf
+
+    target = Sdf.Path(ref.target) if ref.target else Sdf.Path.emptyPath
+    wanted = target.name if target.pathElementCount > 2 else ""  # /MaterialX/Materials/gold: that one
     note = f"from {shown}, which {ref.prim} references (read from the file: usd-core has no UsdMtlx)"
     return [e.model_copy(update={"notes": [note, *e.notes]}) for e in entries if not wanted or e.name == wanted]
 

@@ -85,6 +85,9 @@ def _input(inp, name: str, iname: str, notes: list[str], textured: list[str]):
     value = inp.Get()
     if value is None:
         return None
+    if isinstance(value, str):  # a token or string where the specification has a number
+        raise ConfigError(f"{name}: inputs:{iname} is {value!r}, where UsdPreviewSurface takes a number: give it "
+                          "a number or remove it")
     if hasattr(value, "__len__"):
         rgb = tuple(_r(x) for x in value)
         space = inp.GetAttr().GetColorSpace() if inp.GetAttr().HasColorSpace() else ""
@@ -128,6 +131,8 @@ def _away(inp, default) -> bool:
     value = inp.Get()
     if value is None:
         return False
+    if isinstance(value, str) or isinstance(default, str):  # a token (opacityMode "presence") or an asset
+        return str(value) != str(default)
     given = [float(x) for x in value] if hasattr(value, "__len__") else [float(value)]
     want = [float(x) for x in default] if isinstance(default, tuple) else [float(default)]
     return given != want

@@ -47,8 +47,13 @@ def _get(node, name: str):
 
 def _mean(node, asset, output: str, where: str):
     """The texture's mean through its scale and bias, in linear values."""
+    from pxr import Ar
+
     resolved = asset.resolvedPath if asset is not None else ""
-    if not resolved or "[" in resolved or not Path(resolved).is_file():
+    if resolved and Ar.IsPackageRelativePath(resolved):
+        raise ConfigError(f"its image {asset.path!r} is inside the .usdz package (not read here: unzip the "
+                          "package and convert its .usdc)")
+    if not resolved or not Path(resolved).is_file():
         raise ConfigError(f"its image {asset.path if asset is not None else ''!r} is not found beside the stage")
     if output == "a":
         raise ConfigError("it reads the image's alpha (not read here)")

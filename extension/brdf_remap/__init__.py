@@ -6,7 +6,7 @@ Python the preferences name); nothing of the file changes until a result is acce
 import bpy
 from bpy.props import EnumProperty, StringProperty
 
-from . import operators, panel
+from . import operators, panel, work
 
 
 class BRDFREMAP_preferences(bpy.types.AddonPreferences):
@@ -27,13 +27,25 @@ class BRDFREMAP_preferences(bpy.types.AddonPreferences):
 CLASSES = (BRDFREMAP_preferences, *operators.CLASSES, *panel.CLASSES)
 
 
+@bpy.app.handlers.persistent
+def _file_changes(*args) -> None:
+    """Another file opened or a new one made: the conversion under way and the results waiting to be
+    accepted belong to the file that was open, and go with it."""
+    work.SESSION.cancel()
+    work.SESSION.discard()
+
+
 def register() -> None:
     for cls in CLASSES:
         bpy.utils.register_class(cls)
     panel.register()
+    bpy.app.handlers.load_pre.append(_file_changes)
 
 
 def unregister() -> None:
+    _file_changes()
+    if _file_changes in bpy.app.handlers.load_pre:
+        bpy.app.handlers.load_pre.remove(_file_changes)
     panel.unregister()
     for cls in reversed(CLASSES):
         bpy.utils.unregister_class(cls)

@@ -50,7 +50,7 @@ class _Follows:
 
     def modal(self, context, event):
         session = work.SESSION
-        if event.type == "ESC" or session.job is None:
+        if (event.type == "ESC" and event.value == "PRESS") or session.job is None:
             session.cancel()
             return self._end(context, {"CANCELLED"})
         if event.type != "TIMER":
@@ -63,10 +63,20 @@ class _Follows:
         session.finish()
         return self._end(context, {"FINISHED"})
 
-    def _end(self, context, result):
+    def cancel(self, context):
+        """Blender ends the operator (another file opened, the window closed): the conversion with it."""
+        work.SESSION.cancel()
+        self._stop(context)
+
+    def _stop(self, context) -> None:
         wm = context.window_manager
-        wm.event_timer_remove(self._timer)
-        wm.progress_end()
+        if self._timer is not None:
+            wm.event_timer_remove(self._timer)
+            self._timer = None
+            wm.progress_end()
+
+    def _end(self, context, result):
+        self._stop(context)
         _redraw(context)
         self.report({"INFO"}, work.SESSION.message)
         return result
@@ -140,6 +150,7 @@ class BRDFREMAP_OT_import(_Follows, ImportHelper, bpy.types.Operator):
 
     bl_idname = "brdf_remap.import_matched"
     bl_label = "Import matched"
+    filepath: StringProperty(subtype="FILE_PATH", options={"SKIP_SAVE", "HIDDEN"})  # the browser each time
     filter_glob: StringProperty(default="*.xml;*.mtlx;*.gltf;*.glb;*.usd;*.usda;*.usdc;*.usdz", options={"HIDDEN"})
 
     def invoke(self, context, event):
@@ -162,7 +173,11 @@ class BRDFREMAP_OT_accept(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     def execute(self, context):
-        self.report({"INFO"}, work.SESSION.accept())
+        try:
+            self.report({"INFO"}, work.SESSION.accept())
+        except Refused as exc:
+            self.report({"ERROR"}, str(exc))
+            return {"CANCELLED"}
         _redraw(context)
         return {"FINISHED"}
 

@@ -13,9 +13,9 @@ _previews = None
 
 def _icon(path) -> int:
     """The image as an icon of the panel (loaded once a path)."""
-    key = str(path)
+    key = f"{path}@{path.stat().st_mtime_ns}"  # a file written again is a new image
     if key not in _previews:
-        _previews.load(key, key, "IMAGE")
+        _previews.load(key, str(path), "IMAGE")
     return _previews[key].icon_id
 
 

@@ -19,14 +19,15 @@ class Row:
     error: float | None
     model: str
     reason: str
-    folder: Path
+    folder: Path | None
+    """None for a material that was not converted (failed, unsupported)."""
 
     @property
     def converted(self) -> bool:
         return self.status in USABLE
 
     def images(self) -> list[Path]:
-        return [self.folder / f for f in IMAGES if (self.folder / f).is_file()]
+        return [] if self.folder is None else [self.folder / f for f in IMAGES if (self.folder / f).is_file()]
 
     def line(self) -> str:
         err = f"{self.error:.2%}" if self.error is not None else "–"
@@ -37,7 +38,8 @@ class Row:
 def rows(summary: dict, out: Path) -> list[Row]:
     """The summary's materials, worst first as the report orders them: failed, unsupported, then by error."""
     found = [Row(m["name"], m["status"], m.get("relative_rmse"), m.get("model") or "", m.get("reason") or "",
-                 Path(out) / "materials" / m["slot"]) for m in summary.get("materials", [])]
+                 Path(out) / "materials" / m["slot"] if m.get("slot") else None)
+             for m in summary.get("materials", [])]
     return sorted(found, key=lambda r: (r.converted, -(r.error or 0.0)))
 
 

@@ -9,6 +9,7 @@ import os
 import shutil
 import signal
 import subprocess
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -36,7 +37,12 @@ def tool_command(python: str = "") -> list[str]:
         if not Path(python).is_file():
             raise ToolMissing(f"no Python at {python}: name the Python of a brdf-remap installation in the "
                               "add-on's preferences")
-        probe = subprocess.run([python, "-c", "import brdfremap"], capture_output=True, timeout=120)
+        try:  # run from a folder of no package: Python puts the current folder first on its path
+            probe = subprocess.run([python, "-c", "import brdfremap"], capture_output=True, timeout=60,
+                                   cwd=tempfile.gettempdir())
+        except (OSError, subprocess.SubprocessError) as exc:
+            raise ToolMissing(f"cannot run {python}: {exc}; name the Python of a brdf-remap installation in the "
+                              "add-on's preferences") from None
         if probe.returncode != 0:
             raise ToolMissing(f"{python} has no brdf-remap: install it there (pip install /path/to/brdf-remap) "
                               "or name another Python in the add-on's preferences")
@@ -60,15 +66,21 @@ class Job:
     def start(cls, command: list[str], inputs: list[Path], to: str, out: Path, quality: str = "DEFAULT",
               only: tuple[str, ...] = ()) -> "Job":
         out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
         log = out / "extension.log"
-        argv = [*command, "convert", *map(str, inputs), "--to", to, "--out", str(out), "--events",
-                str(out / "events.jsonl"), "--quiet", *QUALITY[quality]]
+        argv = [*command, "convert", "--to", to, "--out", str(out), "--events", str(out / "events.jsonl"),
+                "--quiet", *QUALITY[quality]]
         for name in only:
             argv += ["--only", name]
-        with log.open("w", encoding="utf-8") as f:  # the child keeps its own handle
-            process = subprocess.Popen(argv, stdout=f, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                                       start_new_session=True)  # its renderers' processes are cancelled with it
+        argv += ["--", *map(str, inputs)]  # a file named like an option is a file
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+            for old in ("convert.json", "events.jsonl"):  # a previous run's, in an export's folder
+                (out / old).unlink(missing_ok=True)
+            with log.open("w", encoding="utf-8") as f:  # the child keeps its own handle
+                process = subprocess.Popen(argv, stdout=f, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                           cwd=out, start_new_session=True)  # cancelled with its renderers
+        except OSError as exc:
+            raise Refused(f"cannot start the conversion in {out}: {exc.strerror or exc}") from None
         return cls(out, process, log)
 
     def progress(self) -> tuple[int, int, str]:
@@ -77,8 +89,13 @@ class Job:
             lines = (self.out / "events.jsonl").read_text(encoding="utf-8").splitlines()
         except OSError:
             return 0, 0, ""
-        last = json.loads(lines[-1]) if lines and lines[-1].strip() else None
-        return (last["done"], last["of"], last["title"]) if last else (0, 0, "")
+        for line in reversed(lines):  # the last one may be half written
+            try:
+                last = json.loads(line)
+                return last["done"], last["of"], last["title"]
+            except (ValueError, KeyError, TypeError):
+                continue
+        return 0, 0, ""
 
     def running(self) -> bool:
         return self.process.poll() is None
@@ -92,12 +109,12 @@ class Job:
         if self.running():
             try:
                 os.killpg(self.process.pid, signal.SIGTERM)
+                self.process.wait(3)
             except ProcessLookupError:
                 return
-            try:
-                self.process.wait(20)
             except subprocess.TimeoutExpired:
                 os.killpg(self.process.pid, signal.SIGKILL)
+                self.process.wait(3)
 
     def summary(self) -> dict:
         """`convert.json`: every material's verdict, error and folder; JobFailed with the tool's last

@@ -98,7 +98,8 @@ class Session:
     """The tool's command, or why it cannot run, by the Python the preferences name."""
 
     def command(self, python: str) -> list[str]:
-        if python not in self.checked:
+        """The tool's command; a failure is checked again each time (the user may have installed it since)."""
+        if not isinstance(self.checked.get(python), list):
             try:
                 self.checked[python] = tool_command(python)
             except ToolMissing as exc:
@@ -137,13 +138,20 @@ class Session:
     def accept(self) -> str:
         if not self.pending:
             return "nothing to accept"
-        self.message, self.pending = self.kind.apply(self.rows, self.libs), False
+        library = self.libs.get(".blend")
+        if library is None or not library.is_file():
+            raise Refused("the conversion wrote no library.blend to accept from: see its report")
+        try:
+            self.message = self.kind.apply(self.rows, self.libs)
+        except OSError as exc:  # a library.blend this Blender cannot read (written by a newer one)
+            raise Refused(f"cannot read {library}: {exc}") from None
+        self.pending = False
         return self.message
 
     def cancel(self) -> None:
         if self.job is not None:
             self.job.cancel()
-            self.message, self.job = f"{self.kind.title()}: cancelled (a rerun resumes what finished)", None
+            self.message, self.job = f"{self.kind.title()}: cancelled", None
 
     def discard(self) -> None:
         self.rows, self.libs, self.pending, self.message = [], {}, False, ""

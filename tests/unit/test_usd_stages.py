@@ -149,3 +149,35 @@ def test_maps_are_written_as_uv_textures_with_their_colour_space(tmp_path):
     assert spaces == [("textures/a/base.png", "sRGB"), ("textures/a/rough.png", "raw")]
     surface = shaders["UsdPreviewSurface"]
     assert surface.GetInput("diffuseColor").HasConnectedSource() and surface.GetInput("roughness").HasConnectedSource()
+
+
+def test_a_token_input_is_compared_as_a_token_and_a_string_for_a_number_is_one_line(tmp_path):
+    stage = tmp_path / "tokens.usda"
+    stage.write_text('''#usda 1.0
+def Material "cutout"
+{
+    token outputs:surface.connect = </cutout/S.outputs:surface>
+    def Shader "S"
+    {
+        uniform token info:id = "UsdPreviewSurface"
+        token inputs:opacityMode = "presence"
+        float inputs:roughness = 0.3
+        token outputs:surface
+    }
+}
+def Material "wrong"
+{
+    token outputs:surface.connect = </wrong/S.outputs:surface>
+    def Shader "S"
+    {
+        uniform token info:id = "UsdPreviewSurface"
+        string inputs:metallic = "yes"
+        token outputs:surface
+    }
+}
+''')
+    entries = {e.name: e for e in UsdReader().read(stage)}
+    assert entries["cutout"].material.params["roughness"] == pytest.approx(0.3)
+    assert any("opacityMode" in n for n in entries["cutout"].notes), entries["cutout"].notes
+    assert entries["wrong"].material is None
+    assert "inputs:metallic is 'yes'" in entries["wrong"].problem and "\n" not in entries["wrong"].problem
