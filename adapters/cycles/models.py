@@ -139,7 +139,7 @@ class Principled(CyclesModel):
         out.update(_layer_params(a))
         if not metal and a.transmission > 0.0:
             out["specular_ior_level"] = 0.5  # a glass's F0 is its IOR's
-        elif not metal:
+        elif not metal and dielectric_f0(float(base["ior"])) > 0.0:  # type: ignore[arg-type]  # IOR 1: no F0 to scale
             f0 = float(sum(a.specular)) / 3
             out["specular_ior_level"] = 0.5 * f0 / dielectric_f0(float(base["ior"]))  # type: ignore[arg-type]
         return out

@@ -111,3 +111,14 @@ def test_a_library_from_a_plugin_of_plain_modelspecs_fails_its_materials_in_one_
 
     with pytest.raises(ConfigError, match="is a plain ModelSpec"):
         model_of(registry_of("old", Old), "old", "m", "lib.xml", "wood: ")
+
+
+def test_principled_from_a_reading_at_ior_1_leaves_the_level_alone():
+    """An IOR of 1 (a held value a same-model remap carries, or a --fix) has no F0 to scale: no
+    division by zero (the corpus's StandardSurface documents hit it)."""
+    from brdfremap.adapters.cycles.models import MODELS
+
+    p = MODELS["principled"]
+    base = p.complete({"ior": 1.0})
+    out = p.from_appearance(p.appearance(p.complete({"base_color": (0.5, 0.5, 0.5)})), base)
+    assert "specular_ior_level" not in out and out["metallic"] == 0.0
