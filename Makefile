@@ -6,6 +6,7 @@
 # Both create .venv and install what they need; `system-deps` adds libLLVM 19 so Mitsuba
 # can use its fast llvm_ad_rgb variant (without it the tool falls back to scalar_rgb),
 # Debian's Chromium (the tests open the HTML report in it; the threejs adapter renders in it),
+# Xvfb and Mesa's OpenGL (the materialx adapter renders with MaterialX's own GLSL on a virtual display),
 # and Node.js with npm, which installs three.js and the Khronos glTF validator, pinned by
 # adapters/threejs/web/package-lock.json, into adapters/threejs/web/node_modules.
 
@@ -24,15 +25,18 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e '.[all]'
 	@touch $(STAMP)
 
+MESA   := /usr/lib/x86_64-linux-gnu
 APT_NEEDS := $(if $(wildcard $(LLVM19)),,libllvm19) $(if $(wildcard /usr/bin/chromium),,chromium) \
-             $(if $(wildcard /usr/bin/node),,nodejs) $(if $(wildcard /usr/bin/npm),,npm)
+             $(if $(wildcard /usr/bin/node),,nodejs) $(if $(wildcard /usr/bin/npm),,npm) \
+             $(if $(wildcard /usr/bin/Xvfb),,xvfb) $(if $(wildcard $(MESA)/dri/swrast_dri.so),,libgl1-mesa-dri) \
+             $(if $(wildcard $(MESA)/libGLX_mesa.so.0),,libglx-mesa0)
 WEB    := adapters/threejs/web
 THREE  := $(WEB)/node_modules/.package-lock.json
 
 system-deps:
 	@if [ "$$(uname -s)" = Linux ] && [ -n "$(strip $(APT_NEEDS))" ] && command -v apt-get >/dev/null; then \
 	  if [ "$$(id -u)" = 0 ]; then SUDO=; else SUDO=sudo; fi; \
-	  echo "installing $(strip $(APT_NEEDS)) (Mitsuba's llvm variant; the browser the report is tested in and three.js renders in; Node.js and npm for three.js)"; \
+	  echo "installing $(strip $(APT_NEEDS)) (Mitsuba's llvm variant; the browser the report is tested in and three.js renders in; Node.js and npm for three.js; a virtual display and Mesa's OpenGL for MaterialX's renderer)"; \
 	  $$SUDO apt-get update -qq && $$SUDO apt-get install -y -qq $(APT_NEEDS) >/dev/null; \
 	fi
 

@@ -1,42 +1,32 @@
-"""MaterialX documents as libraries, through the `materialx` package: documents of older
-versions are upgraded on reading, each is validated against the standard libraries, and every
-material's surface shader (standard_surface, open_pbr_surface, gltf_pbr, UsdPreviewSurface) is
-read as the Cycles Principled BSDF by the correspondence in `correspondence.py`."""
+"""MaterialX documents as libraries, through the `materialx` package: documents of older versions are
+upgraded on reading, each is validated against the standard libraries, and every material's surface
+shader is a material of the `materialx` adapter's model of that shader (open_pbr_surface,
+standard_surface, gltf_pbr, UsdPreviewSurface, disney_principled): its inputs as the document gives
+them (colours in another colour space made linear), rendered by MaterialX's own GLSL. An input an
+image drives directly is a texture (its mean the value where no table maps it); one another graph
+drives is read at its default, and said."""
 
 from __future__ import annotations
 
-import functools
 import re
 from pathlib import Path
 
 from brdfremap.core.data.errors import ConfigError
-from brdfremap.core.library.formats import Entry, clip_into
 from brdfremap.core.data.schemas import Material
 from brdfremap.core.data.textures import colour_to_linear
+from brdfremap.core.library.formats import Entry, clip_into
 
-from .correspondence import HALF, SCALE, QUIET, TO_PRINCIPLED, TRANSMISSION_TINT
+from .mxlib import mx, standard_libraries
 from .versions import upgrade_inputs
 
-NOTE = ("read as Blender Cycles' Principled BSDF by the {shader} correspondence (Blender's Principled BSDF "
-        "follows OpenPBR): MaterialX has no renderer of its own here")
-
-
-def mx():
-    try:
-        import MaterialX
-    except ImportError:
-        raise ConfigError("reading MaterialX needs the materialx package: pip install 'materialx==1.39.*'") from None
-    return MaterialX
-
-
-@functools.cache
-def standard_libraries():
-    """MaterialX's standard libraries, loaded once (about 0.3 s): callers import them into their own
-    documents and never change this one."""
-    m = mx()
-    lib = m.createDocument()
-    m.loadLibraries(m.getDefaultDataLibraryFolders(), m.getDefaultDataSearchPath(), lib)
-    return lib
+WORKING = ("lin_rec709", "lin_srgb")
+"""MaterialX's names for linear Rec.709, the space the renderers' RGB values are in."""
+SRGB_SPACES = {"srgb_texture", "srgb_tx", "sRGB"}
+LINEAR_SPACES = {"", "lin_rec709", "raw", "Raw", "linear", "lin_srgb", "scene-linear Rec.709-sRGB"}
+IMAGES = {"image", "tiledimage", "gltf_image", "gltf_colorimage"}
+CHANNELS = {"outx": 0, "outy": 1, "outz": 2}
+"""A `separate3` of an image: which of its channels each output is (a glTF occlusion-roughness-metallic
+image's roughness is its `outy`, its metallic its `outz`)."""
 
 
 class MaterialXReader:
@@ -63,88 +53,67 @@ class MaterialXReader:
 
 
 def material_entry(m, mat, file: str, upgraded: dict[str, list[str]] | None = None, name: str = "") -> Entry:
-    """One material node of a document (its surface shader by the correspondence), as an entry;
-    ``upgraded``: notes on a shader's inputs an upgrade renamed. Also how a MaterialX shader written
-    directly in USD is read (`adapters/usd`)."""
+    """One material node of a document (its surface shader as the materialx adapter's model of it), as
+    an entry; ``upgraded``: notes on a shader's inputs an upgrade renamed. Also how a MaterialX shader
+    written directly in USD is read (`adapters/usd`)."""
+    from .models import MODELS
+
     upgraded = upgraded or {}
     name = name or mat.getName()
     shaders = [s for s in m.getShaderNodes(mat) if s.getType() == "surfaceshader"]
     if not shaders:
         return Entry(name=name, file=file, problem="no surface shader")
     shader = shaders[0]
-    category = shader.getCategory()
-    if category not in TO_PRINCIPLED:
-        return Entry(name=name, file=file, problem=f"shader {category!r} has no correspondence here (known: "
-                                                    f"{', '.join(TO_PRINCIPLED)})")
+    model = MODELS.get(shader.getCategory())
+    if model is None:
+        return Entry(name=name, file=file, problem=f"shader {shader.getCategory()!r} is not a surface this tool "
+                                                   f"renders (known: {', '.join(sorted(MODELS))})")
+    notes = list(upgraded.get(shader.getName(), []))
     try:
-        params, textured, notes = _principled(shader, category)
+        params, textured = _inputs(shader, model, notes)
     except ConfigError as exc:  # one material's value (an unknown colour space): that material, not the file
         return Entry(name=name, file=file, problem=str(exc))
-    notes[:0] = [NOTE.format(shader=category), *upgraded.get(shader.getName(), [])]
-    textures = _textures(shader, category, name, notes)
-    params.update(_means(textures, name, notes))
+    textures = _textures(shader, model, name, notes)
+    params.update(_means(textures, model, name, notes))
+    notes += clip_into(model, params)
     return Entry(name=name, file=file, notes=notes, textured=textured,
-                 material=Material(adapter="cycles", model="principled", params=params, name=name,
-                                   textures=textures))
+                 material=Material(adapter="materialx", model=model.name, params=params, name=name, textures=textures))
 
 
-def _principled(shader, category: str) -> tuple[dict, list[str], list[str]]:
-    """The Principled values of a shader node, the inputs driven by a graph, and the notes."""
-    from brdfremap.adapters.cycles.models import PRINCIPLED
-
-    nodedef = shader.getNodeDef()
-    used, textured = set(), []
-
-    def value(name: str):
-        used.add(name)
-        inp = shader.getInput(name)
-        if inp is not None and (inp.getConnectedNode() is not None or inp.hasNodeGraphString()
-                                or inp.hasOutputString() or inp.hasInterfaceName()):
-            textured.append(f"{name} <- {_source(inp)}")
-            inp = None
-        given = inp is not None and inp.hasValueString()
-        got = inp.getValue() if given else nodedef.getActiveInput(name).getValue()
-        if not hasattr(got, "asTuple"):
-            return _r(got)
-        # MaterialX keeps 32-bit floats: 0.944 comes back as 0.94400000572; 7 digits are what was written.
-        rgb = tuple(_r(x) for x in got.asTuple())
-        space = inp.getActiveColorSpace() if given else ""
-        if given and inp.getType() in ("color3", "color4") and space not in ("", *WORKING):
-            linear = tuple(_r(x) for x in colour_to_linear(rgb, space, where=f"{shader.getName()}: {name}"))
-            notes.append(f"{name} ({', '.join(f'{x:.4g}' for x in rgb)}) is in {space}: read as "
-                         f"({', '.join(f'{x:.4g}' for x in linear)}) in linear Rec.709, the renderers' working space")
-            return linear
-        return rgb
-
-    notes: list[str] = []
-
-    params: dict = {}
-    for pname, names in TO_PRINCIPLED[category].items():
-        vals = [value(n) for n in names]
-        v = vals[0]
-        if len(vals) == 2:  # a colour times its weight
-            v = tuple(c * float(vals[1]) for c in v)
-        params[pname] = v / 2.0 if pname in HALF else v * SCALE[pname] if pname in SCALE else v
-    tint = TRANSMISSION_TINT.get(category)
-    weight = float(params.get("transmission_weight", 0.0))
-    if tint is not None and weight > 0.0:
-        # Blender's Principled BSDF tints its transmission by Base Color; these shaders by a colour of its own.
-        colour = value(tint)
-        params["base_color"] = tuple((1 - weight) * b + weight * t for b, t in zip(params["base_color"], colour))
-        notes.append(f"transmission_weight {weight:g}: Base Color takes {tint} ({', '.join(f'{x:.4g}' for x in colour)})"
-                     " in that proportion, as Blender's Principled BSDF tints what it transmits by Base Color")
-    notes += clip_into(PRINCIPLED, params) + _unused(shader, nodedef, used)
-    return params, textured, notes
+def _inputs(shader, model, notes: list[str]) -> tuple[dict, list[str]]:
+    """The values the shader node gives its inputs that are the model's parameters (linear colours),
+    and the inputs a graph drives (read at their defaults, unless an image: `_textures`)."""
+    params, textured = {}, []
+    for inp in shader.getInputs():
+        pname = inp.getName()
+        if pname not in model.names:
+            continue
+        if inp.getConnectedNode() is not None or inp.hasNodeGraphString() or inp.hasOutputString() \
+                or inp.hasInterfaceName():
+            textured.append(f"{pname} <- {_source(inp)}")
+            continue
+        if inp.hasValueString():
+            params[pname] = _value(shader, inp, notes)
+    return params, textured
 
 
-SRGB_SPACES = {"srgb_texture", "srgb_tx", "sRGB"}
-LINEAR_SPACES = {"", "lin_rec709", "raw", "Raw", "linear", "lin_srgb", "scene-linear Rec.709-sRGB"}
-
-
-IMAGES = {"image", "tiledimage", "gltf_image", "gltf_colorimage"}
-CHANNELS = {"outx": 0, "outy": 1, "outz": 2}
-"""A `separate3` of an image: which of its channels each output is (a glTF occlusion-roughness-metallic
-image's roughness is its `outy`, its metallic its `outz`)."""
+def _value(shader, inp, notes: list[str]):
+    got = inp.getValue()
+    if isinstance(got, bool):
+        return "true" if got else "false"
+    if isinstance(got, int):
+        return str(got)
+    if not hasattr(got, "asTuple"):
+        return _r(got)
+    # MaterialX keeps 32-bit floats: 0.944 comes back as 0.94400000572; 7 digits are what was written.
+    rgb = tuple(_r(x) for x in got.asTuple())
+    space = inp.getActiveColorSpace()
+    if inp.getType() in ("color3", "color4") and space not in ("", *WORKING):
+        linear = tuple(_r(x) for x in colour_to_linear(rgb, space, where=f"{shader.getName()}: {inp.getName()}"))
+        notes.append(f"{inp.getName()} ({', '.join(f'{x:.4g}' for x in rgb)}) is in {space}: read as "
+                     f"({', '.join(f'{x:.4g}' for x in linear)}) in linear Rec.709, the renderers' working space")
+        return linear
+    return rgb
 
 
 def _image_node(inp) -> tuple[object | None, int | None, str]:
@@ -165,19 +134,22 @@ def _image_node(inp) -> tuple[object | None, int | None, str]:
     return node, channel, ""
 
 
-def _textures(shader, category: str, name: str, notes: list[str]) -> dict:
+def _textures(shader, model, name: str, notes: list[str]) -> dict:
     """The inputs an image node drives directly (`image`, `tiledimage`, glTF's `gltf_image` and
     `gltf_colorimage`, or one channel of one through a `separate3`; default texture coordinates, no
-    tiling, transform or factor), each of a Principled parameter that is that one input as it is, as
-    textures."""
+    tiling, transform or factor), as textures of the parameter of that name."""
     from brdfremap.core.data.textures import texture
 
+    from .correspondence import QUIET
+
     out = {}
-    for pname, inputs in TO_PRINCIPLED[category].items():
-        node, channel, why = _image_node(shader.getInput(inputs[0]))
+    for inp in shader.getInputs():
+        if inp.getName() not in model.names or inp.getName() in QUIET:  # an occlusion map: not reflectance
+            continue
+        node, channel, why = _image_node(inp)
         if node is None:
             continue
-        why = why or _unusable(shader, node, pname, inputs)
+        why = why or _unusable(node)
         f = node.getInput("file")
         path = Path(f.getResolvedValueString()) if f is not None and not why else None
         if path is not None and not path.is_absolute():
@@ -188,41 +160,33 @@ def _textures(shader, category: str, name: str, notes: list[str]) -> dict:
         if not why and space not in SRGB_SPACES | LINEAR_SPACES:
             why = f"its image is in colour space {space!r} (srgb_texture or lin_rec709 are read)"
         if why:
-            notes.append(f"{pname}: {why}: read as its constant")
+            notes.append(f"{inp.getName()}: {why}: read at its default")
             continue
         filt = node.getInput("filtertype")
-        out[pname] = texture(path, "srgb" if space in SRGB_SPACES else "linear",
-                             "nearest" if filt is not None and filt.getValueString() == "closest" else "linear",
-                             channel=channel, where=f"{name}: {pname}")
+        out[inp.getName()] = texture(path, "srgb" if space in SRGB_SPACES else "linear",
+                                     "nearest" if filt is not None and filt.getValueString() == "closest" else "linear",
+                                     channel=channel, where=f"{name}: {inp.getName()}")
     return out
 
 
-def _means(textures: dict, name: str, notes: list[str]) -> dict:
+def _means(textures: dict, model, name: str, notes: list[str]) -> dict:
     """Each texture's mean, the constant its input converts with where no table maps it (as a Mitsuba
     bitmap's is); one that cannot be read is dropped from ``textures``, and said."""
-    from brdfremap.adapters.cycles.models import PRINCIPLED
     from brdfremap.core.data.textures import mean_value, read_values
 
     out = {}
     for pname, tex in list(textures.items()):
         try:
-            values = read_values(tex, PRINCIPLED.param(pname).kind, where=f"{name}: {pname}")
+            values = read_values(tex, model.param(pname).kind, where=f"{name}: {pname}")
         except ConfigError as exc:
-            notes.append(f"{pname}: {exc}: read as its constant")
+            notes.append(f"{pname}: {exc}: read at its default")
             del textures[pname]
             continue
-        out[pname] = PRINCIPLED.param(pname).clip(mean_value(values))
+        out[pname] = model.param(pname).clip(mean_value(values))
     return out
 
 
-def _unusable(shader, node, pname: str, inputs: tuple[str, ...]) -> str:
-    if len(inputs) > 1:
-        weight = shader.getInput(inputs[1])
-        if weight is not None and (weight.getConnectedNode() is not None or
-                                   (weight.hasValueString() and abs(float(weight.getValue()) - 1.0) > 1e-6)):
-            return f"its image is scaled by {inputs[1]} (only an image read as it is is remapped texel by texel)"
-    if pname in HALF or pname in SCALE:
-        return "its image is scaled into the Principled value (only an image read as it is is remapped)"
+def _unusable(node) -> str:
     tc = node.getInput("texcoord")
     if tc is not None and (tc.getConnectedNode() is not None or tc.hasNodeGraphString()):
         return "its image is read through other texture coordinates"
@@ -245,10 +209,6 @@ def _gltf_unusable(node) -> str:
         if inp.getConnectedNode() is not None or (inp.hasValueString() and inp.getValue() != default.getValue()):
             return f"its image's {name} is not the identity (only an image read as it is is remapped texel by texel)"
     return ""
-
-
-WORKING = ("lin_rec709", "lin_srgb")
-"""MaterialX's names for linear Rec.709, the space both renderers' RGB values are in."""
 
 
 def _line_of(path: Path, message: str) -> str | None:
@@ -278,21 +238,7 @@ def _source(inp) -> str:
     node = inp.getConnectedNode()
     if node is None:
         return f"node graph {inp.getNodeGraphString() or inp.getInterfaceName()!r}"
-    if node.getCategory() in ("image", "tiledimage"):
+    if node.getCategory() in IMAGES:
         f = node.getInput("file")
         return f"{node.getCategory()} {f.getValueString() if f is not None else ''!r}"
     return f"{node.getCategory()} node {node.getName()!r}"
-
-
-def _unused(shader, nodedef, used: set[str]) -> list[str]:
-    """Inputs given away from their default that the Principled model has no counterpart for."""
-    out = []
-    for inp in shader.getInputs():
-        name = inp.getName()
-        if name in used or name in QUIET:
-            continue
-        default = nodedef.getActiveInput(name)
-        shown = inp.getValueString() if inp.hasValueString() else "a node graph"
-        if default is None or not inp.hasValueString() or inp.getValueString() != default.getValueString():
-            out.append(f"{name} = {shown} has no counterpart in the Principled model here: ignored")
-    return out

@@ -8,7 +8,7 @@ from brdfremap.core import hookimpl
 @hookimpl
 def brdfremap_register_formats(register_reader, register_writer):
     from .reader import UsdReader
-    from .writer import OpenPbr, UsdWriter
+    from .writer import MtlxSurface, UsdWriter
 
     def cycles_models():
         from brdfremap.adapters.cycles.models import MODELS
@@ -24,13 +24,28 @@ def brdfremap_register_formats(register_reader, register_writer):
 
     def principled():
         from brdfremap.adapters.materialx.correspondence import DIRECT, open_pbr_inputs
-        return OpenPbr(open_pbr_inputs, DIRECT)
+        return MtlxSurface(open_pbr_inputs, DIRECT)
+
+    def materialx_models():
+        from brdfremap.adapters.materialx.models import MODELS
+        return MODELS
+
+    def as_itself(category: str):
+        def surface():
+            from brdfremap.adapters.materialx.models import MODELS
+            model = MODELS[category]
+            return MtlxSurface(lambda params: {k: v for k, v in params.items() if v != model.param(k).default},
+                               {n: n for n in model.names}, model.nodedef)
+        return surface
 
     register_reader(UsdReader())
-    register_writer(UsdWriter("cycles", cycles_models, openpbr={"principled": principled},
+    register_writer(UsdWriter("cycles", cycles_models, mtlx={"principled": principled},
                               preview_maps={"principled": {"base_color": "diffuse_color", "metallic": "metallic",
                                                            "roughness": "roughness"}}))
     register_writer(UsdWriter("mitsuba", mitsuba_models))
+    register_writer(UsdWriter("materialx", materialx_models,
+                              mtlx={c: as_itself(c) for c in ("open_pbr_surface", "standard_surface", "gltf_pbr",
+                                                              "UsdPreviewSurface", "disney_principled")}))
     register_writer(UsdWriter("threejs", threejs_models,
                               preview_maps={"gltf_pbr": {"base_color": "diffuse_color", "metallic": "metallic",
                                                          "roughness": "roughness"}}))

@@ -28,7 +28,7 @@ LINEAR = {"", "lin_rec709", "lin_srgb", "raw", "Raw", "linear", "scene-linear Re
 def preview_defaults() -> dict[str, object]:
     """UsdPreviewSurface's inputs and their defaults, from its definition in MaterialX's standard
     library (usd-core's wheel ships no shader definitions)."""
-    from brdfremap.adapters.materialx.reader import standard_libraries
+    from brdfremap.adapters.materialx.mxlib import standard_libraries
 
     lib = standard_libraries()  # held: a node definition's values are read through its document
     nodedef = lib.getNodeDef("ND_UsdPreviewSurface_surfaceshader")
@@ -142,7 +142,8 @@ def read_mtlx_shader(shader, node_id: str, name: str, file: str) -> Entry:
     """A MaterialX shader written directly in USD, read as the MaterialX reader reads the same
     node in a document: its inputs copied into one (connections listed as textured, read at their
     defaults), then the reader's correspondence."""
-    from brdfremap.adapters.materialx.reader import material_entry, mx, standard_libraries
+    from brdfremap.adapters.materialx.mxlib import mx, standard_libraries
+    from brdfremap.adapters.materialx.reader import material_entry
 
     m = mx()
     lib = standard_libraries()

@@ -3,8 +3,8 @@ material under /Library/Materials, each bound to a sphere (in a row along +x, as
 Its universal surface is a UsdPreviewSurface: the fitted material itself for the
 `threejs:usd_preview_surface` target, otherwise an approximation by the exporters' conventions
 (the model's neutral reading), said so in the material's documentation. A target MaterialX describes
-(Cycles' Principled BSDF, as OpenPBR) also gets its `mtlx` surface: the open_pbr_surface shader
-written directly in USD. Maps are UsdUVTexture (and MaterialX image nodes) reading the library's
+also gets its `mtlx` surface, the shader written directly in USD: a MaterialX shader as fitted, Cycles'
+Principled BSDF as OpenPBR by the correspondence. Maps are UsdUVTexture (and MaterialX image nodes) reading the library's
 `textures/`."""
 
 from __future__ import annotations
@@ -26,12 +26,13 @@ SPACING = 2.5
 
 
 @dataclass
-class OpenPbr:
-    """How a target model is written as MaterialX's open_pbr_surface: its inputs for the model's
-    parameters, and which input each map drives as it is."""
+class MtlxSurface:
+    """How a target model is written as a MaterialX shader in USD (its nodedef: open_pbr_surface's by
+    default): its inputs for the model's parameters, and which input each map drives as it is."""
 
     inputs: Callable[[dict[str, Value]], dict[str, Value]]
     direct: dict[str, str] = field(default_factory=dict)
+    nodedef: str = "ND_open_pbr_surface_surfaceshader"
 
 
 @dataclass
@@ -39,8 +40,9 @@ class UsdWriter:
     adapter: str
     load_models: Callable[[], dict[str, Model]]
     """The adapter's models (imported when a library is written, not when the plugin registers)."""
-    openpbr: dict[str, Callable[[], OpenPbr]] = field(default_factory=dict)
-    """Target models MaterialX describes, by name."""
+    mtlx: dict[str, Callable[[], MtlxSurface]] = field(default_factory=dict)
+    """Target models MaterialX describes, by name: Cycles' Principled BSDF as OpenPBR by the correspondence,
+    a MaterialX shader as itself."""
     preview_maps: dict[str, dict[str, str]] = field(default_factory=dict)
     """Per target model, the maps its UsdPreviewSurface approximation takes as they are (its parameter:
     the approximation's)."""
@@ -72,13 +74,13 @@ class UsdWriter:
         doc = f"source material: {item.name}; UsdPreviewSurface: {how}" + (
             f"; maps not carried by it: {', '.join(left)}" if left else "")
         material = author.preview_surface(stage, path, preview, maps, doc=doc)
-        if item.model in self.openpbr:
-            spec = self.openpbr[item.model]()
-            shader = author.mtlx_surface(stage, material, "ND_open_pbr_surface_surfaceshader", spec.inputs(params),
-                                         _types())
+        if item.model in self.mtlx:
+            spec = self.mtlx[item.model]()
+            types = _types(spec.nodedef)
+            shader = author.mtlx_surface(stage, material, spec.nodedef, spec.inputs(params), types)
             for pname, tex in sorted(item.textures.items()):
                 if pname in spec.direct:
-                    author.mtlx_image(stage, path, shader, spec.direct[pname], tex, _types()[spec.direct[pname]])
+                    author.mtlx_image(stage, path, shader, spec.direct[pname], tex, types[spec.direct[pname]])
         return material
 
 
@@ -114,9 +116,9 @@ def _valid(name: str, i: int, used: set[str]) -> str:
     return out
 
 
-def _types() -> dict[str, str]:
-    """open_pbr_surface's inputs and their MaterialX types."""
-    from brdfremap.adapters.materialx.reader import standard_libraries
+def _types(nodedef: str) -> dict[str, str]:
+    """A MaterialX shader's inputs and their types."""
+    from brdfremap.adapters.materialx.mxlib import standard_libraries
 
     lib = standard_libraries()
-    return {i.getName(): i.getType() for i in lib.getNodeDef("ND_open_pbr_surface_surfaceshader").getActiveInputs()}
+    return {i.getName(): i.getType() for i in lib.getNodeDef(nodedef).getActiveInputs()}

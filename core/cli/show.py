@@ -55,6 +55,9 @@ def _start(r: Report) -> tuple[str, str]:
             f"; clamped: {'; '.join(lk.outside)}" if lk.outside else "")
     if r.job.start is not None:
         return "start", "the job's own: " + format_params(r.start.params)
+    if r.start.rule:
+        error = f" ({r.metrics.start_error:.2%} on the fit scene)" if r.metrics.start_error is not None else ""
+        return "start", f"the fixed rule, {r.start.rule}{error}: " + format_params(r.start.params)
     return "start", ("the exporters' conversion: " + format_params(r.start.params) if r.start.informed
                      else "the target's defaults")
 

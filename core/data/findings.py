@@ -278,6 +278,35 @@ class ImagePrecision(_Finding):
                 "model's; have the renderer write float EXR, PFM or HDR")
 
 
+class Approximated(_Finding):
+    """One side's renderer draws the material only approximately (a real-time renderer's subsurface or
+    transmission): the images compared are that approximation, so the result is not checked against what
+    the parameters mean (its verdict is unchecked where nothing else is wrong)."""
+
+    kind: Literal["approximated"] = "approximated"
+    side: Literal["source", "target"]
+    detail: str
+
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def severity(self) -> Severity:
+        return Severity.UNCHECKED
+
+    def sentence(self) -> str:
+        return f"the {self.side} is matched as its renderer draws it, which is an approximation: {self.detail}"
+
+
+class SameMaterial(_Note):
+    """The target is the source's own model in the same renderer: the source's parameters are the
+    result, with nothing to fit or to judge."""
+
+    kind: Literal["same_material"] = "same_material"
+
+    def sentence(self) -> str:
+        return "the target is the source's own model in the same renderer: its parameters are the source's, " \
+               "nothing was fitted or rendered to judge them"
+
+
 class ValidationSkipped(_Note):
     kind: Literal["validation_skipped"] = "validation_skipped"
     condition: Lighting
@@ -464,7 +493,7 @@ FINDINGS = (ErrorAboveThreshold, ModelMismatch, TableMismatch, HeldOutAbove, Ren
             TransportUnchecked, CannotResolve, ImagePrecision, NoEffect, IllConditioned, NotAtMinimum,
             PinnedOnBound, RendererAlters, ValidationSkipped, NothingFitted, TableLookup, TexturedAbove, TexturedNotes,
             StartKept, ChoiceTried, SmoothHeld, SchemeChosen, DeadParameters,
-            JointRefined, PredictionNotRealised, NoisePolished, InputsTried)
+            JointRefined, PredictionNotRealised, NoisePolished, InputsTried, Approximated, SameMaterial)
 Finding = Annotated[Union[FINDINGS], Field(discriminator="kind")]
 
 FindingKind = StrEnum("FindingKind", {c.model_fields["kind"].default.upper(): c.model_fields["kind"].default
@@ -496,8 +525,11 @@ class Verdict(Strict):
         if not problems:
             status = Status.UNCHECKED if any(f.severity == Severity.UNCHECKED for f in findings) else Status.OK
         elif any(isinstance(f, (ModelMismatch, TableMismatch)) for f in problems) and all(
-                isinstance(f, (ModelMismatch, TableMismatch, HeldOutAbove)) for f in problems):
-            status = Status.MISMATCH  # the closest this model gets, under the held-out lights too
+                isinstance(f, (ModelMismatch, TableMismatch, HeldOutAbove)) for f in problems) and not any(
+                isinstance(f, Approximated) for f in findings):
+            # The closest this target model gets, under the held-out lights too; not claimed where a side is
+            # drawn approximately (the gap may be the approximation's): unreliable then, and said.
+            status = Status.MISMATCH
         else:
             status = Status.UNRELIABLE
         return cls(status=status, findings=list(findings))
@@ -525,9 +557,13 @@ class Verdict(Strict):
         """The unreliable findings' sentences, joined; else what was not checked and what was; "ok"
         when neither."""
         if self.problems:
-            return "; ".join(f.message for f in self.problems)
+            drawn = [f for f in self.findings if isinstance(f, Approximated)]
+            return "; ".join(f.message for f in [*self.problems, *drawn])
         if self.unchecked:
-            checked = getattr(self.unchecked[0], "checked", [])
+            lights = [f for f in self.unchecked if hasattr(f, "checked")]  # conditions unresolved: which were
+            if not lights:
+                return "; ".join(f.message for f in self.unchecked)
+            checked = lights[0].checked
             return "; ".join(f.message for f in self.unchecked) + (
                 f"; checked under {', '.join(checked)}" if checked else "; checked under no light")
         return "ok"

@@ -83,5 +83,9 @@ class Renders(Protocol):
     def notes(self, params: dict[str, Value]) -> list[str]:
         """What the target renderer does to these values that the image cannot show (a trim)."""
 
+    def approximations(self, params: dict[str, Value]) -> list[tuple[str, str]]:
+        """(side, what) each side's renderer draws only approximately of its material (the source's,
+        the target at these values): a real-time renderer's subsurface or transmission."""
+
     def target_renders(self) -> int:
         """Target renders made so far (repeats served from a cache not counted)."""

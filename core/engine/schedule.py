@@ -405,6 +405,7 @@ def _conclude(run: _Run, plan: Plan, state: _State, assessment: Assessment, join
     evidence = Evidence(error=state.err, noise_floor=floor, threshold=run.threshold,
                         resolve_limit=run.settings.resolve_limit, assessment=assessment, stages=run.stages,
                         cond_limit=run.tuning.cond_limit, renderer_notes=run.renders.notes(state.params),
+                        approximated=run.renders.approximations(state.params),
                         fitted=bool(run.free), trust_prediction=trust, validation=validation, agreement=agreement,
                         images=(run.scene.source, state.image))
     return EngineResult(

@@ -22,6 +22,7 @@ from ..data.findings import (
     NothingFitted,
     PinnedOnBound,
     TableLookup,
+    Approximated,
     RendererAlters,
     RenderersDisagree,
     RenderersFloor,
@@ -55,6 +56,8 @@ class Evidence:
     stages: list[StageResult]
     cond_limit: float
     renderer_notes: list[str]
+    approximated: list[tuple[str, str]] = field(default_factory=list)
+    """(side, what) a side's renderer draws only approximately (`Renders.approximations`)."""
     fitted: bool = True
     """False when every parameter was held: a comparison, with no fit to judge."""
     trust_prediction: bool = True
@@ -162,6 +165,7 @@ def judge(ev: Evidence, notes: list) -> Verdict:
                   if p is scene[0] else p for p in errors]
     problems = errors + fit + [RendererAlters(detail=n) for n in ev.renderer_notes]
     extra: list = [ValidationSkipped(condition=k, why=v) for k, v in ev.validation.skipped.items()]
+    extra += [Approximated(side=side, detail=what) for side, what in ev.approximated]
     if ev.agreement.unchecked:
         extra.append(TransportUnchecked(why=ev.agreement.unchecked))
     if not ev.fitted and not any(isinstance(n, TableLookup) for n in notes):

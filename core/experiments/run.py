@@ -91,7 +91,8 @@ def _known(spec, name: str, file: str, where: str) -> None:
 
 def _forward_task(exp: Experiment, file: str, p: Point, scene: ProbeScene, registry: AdapterRegistry) -> Task:
     job = Job(source=Material(adapter=exp.source.adapter, model=exp.source.model, params=p.params, name=p.id),
-              target=exp.target, scene=scene, settings=exp.options.for_study(), label=f"{file} point {p.id}")
+              target=exp.target, scene=scene, settings=exp.options.for_study(), label=f"{file} point {p.id}",
+              fit_same_model=True)
     where = Where(source_file=file, source_prefix="source.",
                   params_prefix=f"point {p.id} ({exp.sweep.param}={label(p.value)})",
                   target_file=file, target_prefix="target.", fix_prefix="target.fix", command_line=False)
@@ -109,7 +110,7 @@ def _run_back(exp: Experiment, file: str, scene: ProbeScene, registry: AdapterRe
         job = Job(source=Material(adapter=fwd.target.adapter, model=fwd.target.model, params=fwd.params,
                                   name=f"{r.point.id} forward"),
                   target=back, scene=scene, settings=exp.options.for_study(),
-                  label=f"{file} point {r.point.id} (forward result)")
+                  label=f"{file} point {r.point.id} (forward result)", fit_same_model=True)
         tasks.append(Task(f"{r.point.id}/back", resolve(job, registry, where), f"{r.point.id} back"))
     spec = registry.get(back.adapter).models[back.model]
     for r, d in zip(rows, runner.run(tasks)):

@@ -16,8 +16,22 @@ only their parameters (`adapters/subprocess`), or a model an exporter has no con
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 from ..data.appearance import Appearance
 from ..data.schemas import ModelSpec, Value
+
+
+@dataclass(frozen=True)
+class Rule:
+    """A material's parameters for another model by a fixed rule its own format defines (an importer's
+    table), and the rule in words."""
+
+    name: str
+    params: dict[str, Value]
+    inputs: dict[str, str] = field(default_factory=dict)
+    """Each of the other model's parameters that is one of this material's as it is (an image driving it
+    drives the other's the same): the other's name, this one's."""
 
 
 class Model(ModelSpec):
@@ -36,6 +50,19 @@ class Model(ModelSpec):
         conversion that depends on one the fit keeps. Only fitted parameters are used; values out
         of bounds are clipped by the caller. Must not render."""
         return {}
+
+    def rule_for(self, target: "Model", params: dict[str, Value]) -> Rule | None:
+        """This material's parameters for ``target`` by a fixed rule its format defines (MaterialX's
+        correspondence to Blender's Principled BSDF: what an importer maps by name), or None. A fit to
+        ``target`` starts from it, and its report gives the rule's error beside the fit's. ``params`` is
+        complete. Must not render."""
+        return None
+
+    def approximations(self, params: dict[str, Value]) -> list[str]:
+        """What this model's renderer draws of these parameters only approximately (a real-time
+        renderer's subsurface or transmission), each in words: an image of it is the approximation, not
+        what the parameters mean, and a result judged on it says so (verdict unchecked)."""
+        return []
 
     def derive(self, params: dict[str, Value]) -> dict[str, Value]:
         """The quantities `derived` names, from complete parameters (a conductor's normal-incidence

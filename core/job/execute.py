@@ -24,7 +24,7 @@ import numpy as np
 from ..data.account import Ledger, Metered, purpose
 from ..data.atomic import why
 from ..data.errors import RemapError, RenderError
-from ..data.findings import SmoothHeld
+from ..data.findings import SameMaterial, SmoothHeld, Verdict
 from ..data.imageio import write_exr, write_previews
 from ..data.schemas import Lobe, ParamKind, Value
 from ..data.settings import FitScene, Inputs, Start
@@ -32,7 +32,8 @@ from ..engine import ProgressFn, remap
 from ..host.plugins import AdapterRegistry, collect_adapters
 from ..host.model import Model
 from ..host.protocol import Adapter
-from .fitscene import choose as choose_scene
+from ..engine.results import EngineResult
+from .fitscene import FitScene as Chosen, choose as choose_scene
 from .job import Job, Resolved
 from .renders import CachedRenderer, ProbeRenders
 from .report import FileRecord, Report, build_report
@@ -139,6 +140,8 @@ def fit_policy(job: Job) -> str:
 
 
 def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | None = None) -> Outcome:
+    if resolved.same_material:
+        return same_material(resolved, adapters)
     t0 = time.perf_counter()
     job = resolved.job
     src, tgt = job.source, job.target
@@ -184,8 +187,36 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
                           account=ledger.account(time.perf_counter() - t0),
                           adapters=info, files=[FileRecord(name=n, sha256=hashlib.sha256(b).hexdigest(), bytes=len(b))
                                                 for n, b in files.items()],
-                          textures=texturing.record if texturing else None)
+                          textures=texturing.record if texturing else None,
+                          rule=resolved.rule.name if informed and resolved.rule is not None else "")
     return Outcome(report, renders.source_image(), result.target_image, files)
+
+
+def same_material(resolved: Resolved, adapters: AdapterPool) -> Outcome:
+    """A remap to the source's own model in the same renderer: the source's parameters, rendered once
+    for the result's images, with nothing fitted and nothing to judge (`Resolved.same_material`)."""
+    t0 = time.perf_counter()
+    job = resolved.job
+    ledger = Ledger()
+    source = CachedRenderer(Metered(adapters[job.source.adapter], "source", ledger), job.source.adapter,
+                            resolved.source_spec, job.scene)
+    with purpose("source"):
+        image = np.asarray(source(resolved.source_params), np.float32)
+    params = {**resolved.base, **resolved.source_params}
+    settings = job.settings
+    result = EngineResult(params=params, fitted=[], scheme=settings.scheme, scheme_used=settings.scheme,
+                          relative_rmse=0.0, perceptual=0.0, threshold=settings.threshold, source_noise=0.0,
+                          target_noise=0.0, renders=0, seconds=time.perf_counter() - t0,
+                          verdict=Verdict.of([SameMaterial()]), target_image=image)
+    files = artifacts(adapters[job.target.adapter], resolved.target_spec, params, image, image)
+    derived = (resolved.source_spec.derive(resolved.source_params), resolved.target_spec.derive(params))
+    report = build_report(resolved, result, start={}, derived=derived, fit_scene=Chosen(job.scene),
+                          source_renders=source.cache.misses, renders_by_resolution={},
+                          seconds=time.perf_counter() - t0, account=ledger.account(time.perf_counter() - t0),
+                          adapters=describe(adapters, [job.source.adapter]),
+                          files=[FileRecord(name=n, sha256=hashlib.sha256(b).hexdigest(), bytes=len(b))
+                                 for n, b in files.items()])
+    return Outcome(report, image, image, files)
 
 
 def _textured_files(d: Path, adapter: Adapter, model: Model, texturing: Texturing) -> list[Path]:
@@ -238,22 +269,25 @@ def artifacts(adapter: Adapter, model: Model, params: dict[str, Value], source: 
 
 
 def informed_start(resolved: Resolved) -> dict[str, Value]:
-    """The exporters' conversion of the source into the target's fitted parameters (clipped to
-    their bounds) and its discrete choices (a distribution the source names, unless held), or {}
-    when either adapter has no neutral reading for its model. A value of the wrong shape or not
-    finite is left out: the start is a hint, the fit does not need it."""
-    look = resolved.look
-    if look is None:
+    """The source's fixed rule for the target where its format defines one (`Resolved.rule`), else the
+    exporters' conversion of the source into the target's fitted parameters (clipped to their bounds)
+    and its discrete choices (a distribution the source names, unless held), or {} when either adapter
+    has no neutral reading for its model. A value of the wrong shape or not finite is left out: the
+    start is a hint, the fit does not need it."""
+    look, spec, base = resolved.look, resolved.target_spec, resolved.base
+    if resolved.rule is not None:  # every value the rule gives: the fitted ones, and what differs from the base
+        conv = {k: v for k, v in resolved.rule.params.items() if spec.param(k).fit or v != base[k]}
+        named = set(conv)
+    elif look is None:
         return {}
-    spec = resolved.target_spec
-    conv = spec.from_appearance(look, dict(resolved.base))
-    out: dict[str, Value] = {}
-    for p in spec.parameters:
-        if (p.kind == ParamKind.CHOICE and p.name not in resolved.fixed and conv.get(p.name) in p.choices
-                and _named(spec, look, resolved.base, p, conv[p.name])):
-            out[p.name] = conv[p.name]
+    else:
+        conv = spec.from_appearance(look, dict(base))
+        named = {p.name for p in spec.parameters if p.kind == ParamKind.CHOICE and p.name in conv
+                 and conv[p.name] in p.choices and _named(spec, look, base, p, conv[p.name])}
+    out: dict[str, Value] = {p.name: conv[p.name] for p in spec.parameters if p.kind == ParamKind.CHOICE
+                             and p.name not in resolved.fixed and p.name in named and conv[p.name] in p.choices}
     # Held ones too (the source's coat tint is rendered, not fitted), where the choices make them count.
-    chosen = {**resolved.base, **out}
+    chosen = {**base, **out}
     for name in (p.name for p in spec.parameters
                  if p.kind != ParamKind.CHOICE and p.name not in resolved.fixed and spec.is_active(p.name, chosen)):
         try:

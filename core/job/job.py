@@ -21,7 +21,7 @@ from ..data.model import Strict
 from ..data.scene import MAX_SPP, ProbeScene
 from ..data.appearance import Appearance
 from ..data.schemas import Material, ModelSpec, ParamKind, Value
-from ..host.model import Model
+from ..host.model import Model, Rule
 from .texturing import TexturedStep
 from ..data.settings import Settings
 from ..engine.tuning import ENGINE_VERSION, Tuning
@@ -65,6 +65,10 @@ class Job(Strict):
                                                                        "recorded by `resolve`; in the key.")
     lookup: Lookup | None = Field(None, description="Parameters from a remap table: rendered and judged, not "
                                                     "fitted.")
+    fit_same_model: bool = Field(False, description="Fit a source to its own model of the same renderer all the same "
+                                                    "(a test of the optimiser, whose answer is known; tables and "
+                                                    "experiments); else its parameters are the result, with nothing "
+                                                    "to fit.")
     start: dict[str, Any] | None = Field(None, description="Target parameters the fit starts from instead of the "
                                                            "exporters' conversion (a table's continuation from its "
                                                            "neighbours' fits).")
@@ -87,6 +91,8 @@ class Job(Strict):
             doc["lookup"] = self.lookup.model_dump(mode="json", exclude={"file"})
         if self.start is not None:
             doc["start"] = self.start
+        if self.fit_same_model:
+            doc["fit_same_model"] = True
         if self.source.textures:  # an image by its content, not its path
             doc["textures"] = {k: t.model_dump(mode="json", exclude={"file"}) for k, t in self.source.textures.items()}
         blob = json.dumps(doc, sort_keys=True, separators=(",", ":"))
@@ -138,6 +144,22 @@ class Resolved:
         """The source read in renderer-neutral terms (`Model.appearance`), read once for the job: its
         informed start, the inputs it needs, its reference for the renderers' floor."""
         return self.source_spec.appearance(self.source_params)
+
+    @functools.cached_property
+    def rule(self) -> Rule | None:
+        """The source's fixed rule for the target model, where its format defines one (`Model.rule_for`):
+        the fit's start, and the rule's error beside the fit's."""
+        return self.source_spec.rule_for(self.target_spec, self.source_params)
+
+    @property
+    def same_material(self) -> bool:
+        """The target is the source's own model in the same renderer, nothing held otherwise and nothing
+        looked up: the source's parameters are the result, with nothing to fit."""
+        job = self.job
+        return (not job.fit_same_model
+                and (job.source.adapter, job.source.model) == (job.target.adapter, job.target.model)
+                and job.lookup is None and job.start is None and self.textured is None
+                and all(self.source_params.get(k) == v for k, v in self.fixed.items()))
 
 
 def model_of(registry: AdapterRegistry, adapter: str, model: str, file: str | None, prefix: str) -> Model:

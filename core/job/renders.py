@@ -224,6 +224,10 @@ class ProbeRenders:
     def notes(self, params: dict[str, Value]) -> list[str]:
         return list(self.target.model.notes(params))
 
+    def approximations(self, params: dict[str, Value]) -> list[tuple[str, str]]:
+        return [("source", d) for d in self.source_spec.approximations(self.source_params)] + \
+            [("target", d) for d in self.target.model.approximations(params)]
+
     def target_renders(self) -> int:
         return self.target.cache.misses
 

@@ -28,12 +28,13 @@ from .job import Job, Resolved
 from .renders import rounded
 from .texturing import Textured
 
-SCHEMA_VERSION = 7
+SCHEMA_VERSION = 8
 """Bump whenever the fields change (an older reader refuses a field it does not know). 4: a job's
 table lookup, a textured source's record; 5: the account of the job's renders; 6: the renderers'
 difference on a white Lambertian in a held-out error (`renderers`) and its note (`renderers_floor`);
 7: the held inputs the source needs (`inputs_tried`, `Settings.inputs`) and what a renderers'
-floor was measured on (`reference`)."""
+floor was measured on (`reference`); 8: the fixed rule a start is (`start.rule`), the findings
+`approximated` and `same_material`."""
 READS_FROM = 7
 """The oldest format read. 4 and 5 only added fields (left out of the digest while absent), but 6
 changed what a verdict is (an unresolved condition is unchecked, no longer a note of an ok) and what
@@ -80,6 +81,9 @@ class Start(_Strict):
     informed: bool = Field(description="The fit started from the exporters' conversion of the source.")
     params: dict[str, Any] = Field(description="That conversion, or the job's own start (`job.start`), where one "
                                                "was used.")
+    rule: str = Field("", description="The fixed rule that conversion is, where the source's format defines one for "
+                                      "the target (MaterialX's correspondence to Blender's Principled BSDF): "
+                                      "`metrics.start_error` is then the rule's own error, the fit's beside it.")
 
 
 class FitSceneRecord(_Strict):
@@ -165,7 +169,8 @@ class Report(WithDerived):
         taken for the job's result. Fields of format 4 are left out while absent (see `READS_FROM`)."""
         doc = self.model_dump(mode="json", exclude={"digest"})
         for container, key in ((doc, "textures"), (doc, "account"), (doc["job"], "lookup"), (doc["job"], "start"),
-                               (doc["job"]["source"], "textures")):
+                               (doc["job"], "fit_same_model"), (doc["job"]["source"], "textures"),
+                               (doc["start"], "rule")):
             if not container.get(key):
                 container.pop(key, None)
         return hashlib.sha256(json.dumps(doc, sort_keys=True, ensure_ascii=False).encode()).hexdigest()
@@ -180,7 +185,7 @@ class Report(WithDerived):
 def build_report(resolved: Resolved, result: EngineResult, *, start: dict, derived: tuple[dict, dict], fit_scene,
                  source_renders: int, renders_by_resolution: dict[str, int], seconds: float,
                  adapters: dict[str, dict[str, Any]], files: list[FileRecord],
-                 textures: Textured | None = None, account: Account | None = None) -> Report:
+                 textures: Textured | None = None, account: Account | None = None, rule: str = "") -> Report:
     """The report, in one place: ``derived`` holds the source's and the target's derived quantities."""
     from .. import __version__
 
@@ -201,7 +206,7 @@ def build_report(resolved: Resolved, result: EngineResult, *, start: dict, deriv
                                                                                     result.noise_floor),
                         threshold=result.threshold, start_error=result.start_error,
                         jacobian_condition=_finite(result.jacobian_condition)),
-        start=Start(informed=bool(start) and job.start is None, params=rounded(start)), renders=result.renders,
+        start=Start(informed=bool(start) and job.start is None, params=rounded(start), rule=rule), renders=result.renders,
         renders_by_resolution=renders_by_resolution, source_renders=source_renders, seconds=seconds,
         scheme=result.scheme, scheme_used=result.scheme_used, verdict=v.status, findings=v.findings,
         validation=result.validation.checks, validation_skipped=result.validation.skipped, stages=result.stages,

@@ -19,6 +19,7 @@ from ..data.appearance import Appearance
 from ..data.atomic import write_bytes_atomic, write_json_atomic
 from ..data.errors import ConfigError, RemapError
 from ..data.scene import ProbeScene
+from ..data.schemas import Material
 from ..data.settings import Settings
 from ..data.textures import Texture
 from ..host.plugins import AdapterRegistry
@@ -143,6 +144,15 @@ def _through_table(item: Item, dest: Destination, registry: AdapterRegistry, sce
     e, src = item.entry, item.entry.material
     answers, why = _table_answers(e, src, dest, registry, tables)
     if not answers:
+        ruled = _by_rule(e, registry, tables)
+        if ruled is not None:  # a table of the model the source's own format maps it to by a fixed rule
+            got, because = _table_answers(e, ruled[0], dest, registry, tables)
+            if got:
+                src, answers = ruled[0], got
+                item.entry = e.model_copy(update={"material": src, "notes": [*e.notes, ruled[1]]})
+            else:
+                why = because
+    if not answers:
         inputs = ", ".join(sorted(src.textures))
         item.entry = e.model_copy(update={
             "notes": [*e.notes, f"textured inputs ({inputs}) converted with their constant values: {why}"],
@@ -165,6 +175,33 @@ def _through_table(item: Item, dest: Destination, registry: AdapterRegistry, sce
                      f"probe light; the other tables': {others})")
     item.task = Task(item.slot, resolve(job, registry, where, textured=texture_result), e.name)
     return True
+
+
+def _by_rule(e: Entry, registry: AdapterRegistry, tables: list[TableUse]):
+    """A textured material as another model's, by the fixed rule its format defines (MaterialX's
+    correspondence to Blender's Principled BSDF), where a given table maps that model and every image
+    drives an input the rule takes as it is: (the material, a note saying so), or None."""
+    src = e.material
+    own = model_of(registry, src.adapter, src.model, e.file, f"{e.name}: ")
+    params = own.complete(src.params, file=e.file, prefix=f"{e.name}: params")
+    for use in tables:
+        s = use.table.spec.source
+        if (s.adapter, s.model) == (src.adapter, src.model) or s.adapter not in registry.names() \
+                or s.model not in registry.get(s.adapter).models:
+            continue
+        rule = own.rule_for(registry.get(s.adapter).models[s.model], params)
+        renamed = {mine: theirs for theirs, mine in (rule.inputs.items() if rule else ())}
+        if rule is None or not set(src.textures) & set(renamed):
+            continue
+        material = Material(adapter=s.adapter, model=s.model, name=src.name, params=dict(rule.params),
+                            textures={renamed[k]: t for k, t in src.textures.items() if k in renamed})
+        loose = sorted(set(src.textures) - set(renamed))
+        return material, (f"read as {s.adapter}:{s.model} by the fixed rule ({rule.name}) to go through a table, "
+                          f"which maps that model: the texel-by-texel remap and its check render the rule's "
+                          f"{s.model}, not this {src.model}" + (
+                              f"; images the rule does not take as they are ({', '.join(loose)}) are their "
+                              "means" if loose else ""))
+    return None
 
 
 def _pct(error: float | None) -> str:

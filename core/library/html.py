@@ -44,6 +44,8 @@ def _card(item: "Item") -> dict:
             "held_out": [{"label": c.label, "error": c.error, "noise": c.noise_floor, "beyond": c.beyond_noise,
                           "judged": c.noise_floor <= rep.job.settings.resolve_limit} for c in rep.validation],
             "fit_scene": rep.fit_scene.why if rep.fit_scene else "",
+            "rule": {"name": rep.start.rule, "error": m.start_error} if rep.start.rule and m.start_error is not None
+            else None,
             "target": f"{rep.target.adapter}:{rep.target.model}", "textures": _textures(rep, folder)}
     return card
 

@@ -98,7 +98,8 @@ def point_task(p: Plan, registry: AdapterRegistry, slot: str, values: dict, titl
                lookup: Lookup | None = None, start: dict | None = None) -> Task:
     """The job of one point (a fit, a refit from ``start``, or a lookup's check) stored at ``slot``."""
     job = Job(source=_material(p, values, slot), target=p.spec.target, scene=scene, settings=settings.for_study(),
-              label=f"{p.file} {slot}", lookup=lookup, start=start)
+              label=f"{p.file} {slot}", lookup=lookup, start=start,
+              fit_same_model=True)
     where = Where(source_file=p.file, source_prefix="source.", params_prefix=f"{slot} ({shown(values)})",
                   target_file=p.file, target_prefix="target.", fix_prefix="target.fix", command_line=False)
     return Task(slot, resolve(job, registry, where), title)

@@ -26,7 +26,7 @@ class Export:
 
 EXPORTS = {"GLTF": Export("glTF (judged in three.js)", "threejs", ".gltf"),
            "MITSUBA": Export("Mitsuba XML", "mitsuba", ".xml"),
-           "MATERIALX": Export("MaterialX (OpenPBR, through Principled)", "cycles:principled", ".mtlx")}
+           "MATERIALX": Export("MaterialX (OpenPBR, judged in MaterialX's renderer)", "materialx:open_pbr_surface", ".mtlx")}
 
 
 @dataclass

@@ -80,7 +80,7 @@ print("IMPORTED", json.dumps(out))
 def test_blender_s_usd_importer_imports_library_usda(tmp_path, cycles_adapter):
     from brdfremap.adapters.cycles.models import PRINCIPLED
     from brdfremap.adapters.materialx.correspondence import DIRECT, open_pbr_inputs
-    from brdfremap.adapters.usd.writer import OpenPbr, UsdWriter
+    from brdfremap.adapters.usd.writer import MtlxSurface, UsdWriter
     from brdfremap.core.library.formats import Converted
 
     items = [Converted("red paint", "principled", {"base_color": (0.6, 0.1, 0.1), "roughness": 0.4,
@@ -88,7 +88,7 @@ def test_blender_s_usd_importer_imports_library_usda(tmp_path, cycles_adapter):
              Converted("gold", "principled", {"base_color": (1.0, 0.77, 0.34), "metallic": 1.0, "roughness": 0.2},
                        tmp_path)]
     (path,) = UsdWriter("cycles", lambda: {"principled": PRINCIPLED},
-                        openpbr={"principled": lambda: OpenPbr(open_pbr_inputs, DIRECT)}).write(tmp_path, items)
+                        mtlx={"principled": lambda: MtlxSurface(open_pbr_inputs, DIRECT)}).write(tmp_path, items)
     out = subprocess.run([sys.executable, "-c", BLENDER_IMPORT, str(path)], capture_output=True, text=True,
                          timeout=300)
     assert out.returncode == 0, out.stderr[-2000:]

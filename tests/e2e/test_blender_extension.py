@@ -75,7 +75,7 @@ def test_every_operator_works_headless_on_real_files(extension_zip, tmp_path, co
     assert placed["red paint (before remap)"]["users"] == 0
 
     assert {"scene.brdf-remap/threejs/library.gltf", "scene.brdf-remap/mitsuba/library.xml",
-            "scene.brdf-remap/cycles-principled/library.mtlx"} <= set(log["exported"]), log["exported"]  # by the .blend
+            "scene.brdf-remap/materialx-open_pbr_surface/library.mtlx"} <= set(log["exported"]), log["exported"]  # by the .blend
     for target in ("GLTF", "MITSUBA", "MATERIALX"):
         assert "1 material(s)" in log[f"export {target}"]["panel"][0], log[f"export {target}"]
 

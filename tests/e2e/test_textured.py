@@ -193,8 +193,8 @@ def test_a_blend_image_texture_and_a_materialx_image_are_read_as_textures(tmp_pa
     doc.write_text(MTLX.format(colour=DATA / "reflectance.png", rough=DATA / "roughness.png"))
     (look,) = MaterialXReader().read(doc)
     tex = look.material.textures
-    assert set(tex) == {"base_color", "roughness"} and tex["base_color"].colorspace == "srgb"
-    assert tex["roughness"].colorspace == "linear" and tex["roughness"].filter == "nearest"
+    assert set(tex) == {"base_color", "specular_roughness"} and tex["base_color"].colorspace == "srgb"  # its inputs
+    assert tex["specular_roughness"].colorspace == "linear" and tex["specular_roughness"].filter == "nearest"
 
 
 MTLX = """<?xml version="1.0"?>
@@ -261,7 +261,7 @@ def test_materialx_own_gltf_boombox_reads_its_packed_textures_and_goes_through_a
     (box,) = MaterialXReader().read(doc)
     tex = box.material.textures
     assert {k: (t.channel, t.colorspace) for k, t in tex.items()} == {
-        "base_color": (None, "srgb"), "roughness": (1, "linear"), "metallic": (2, "linear")}
+        "base_color": (None, "srgb"), "roughness": (1, "linear"), "metallic": (2, "linear"), "emissive": (None, "srgb")}
     assert box.material.params["metallic"] < 0.2 and max(box.material.params["base_color"]) < 0.3  # black plastic
     table = ROOT / "configs" / "tables" / "built" / "cycles-principled-to-mitsuba-principled.json"
     assert main(["convert", str(doc), "--to", "mitsuba", "--table", str(table), "--out", str(tmp_path / "o"),

@@ -97,7 +97,7 @@ def _toy_registry():
 
 def _job(reg, src, scene, fix=None, **settings):
     job = Job(source=src, target=Target(adapter="toy", model="toy", fix=fix or {}), scene=scene,
-              settings=Settings(**settings), label="src.yaml")
+              settings=Settings(**settings), label="src.yaml", fit_same_model=True)  # the optimiser under test
     return resolve(job, reg)
 
 
@@ -130,8 +130,9 @@ def test_an_informed_start_saves_renders_and_is_reported(tmp_path):
     assert out["informed"].renders < out["defaults"].renders
     assert out["informed"].metrics.relative_rmse < 1e-3
     doc = out["informed"].document()
-    assert doc["start"] == {"informed": True, "params": {"diffuse": [0.6, 0.3, 0.1], "specular": 0.8, "alpha": 0.15}}
-    assert out["defaults"].document()["start"] == {"informed": False, "params": {}}
+    assert doc["start"] == {"informed": True, "params": {"diffuse": [0.6, 0.3, 0.1], "specular": 0.8, "alpha": 0.15},
+                            "rule": ""}
+    assert out["defaults"].document()["start"] == {"informed": False, "params": {}, "rule": ""}
 
 
 class _NoisyToy(ToyAdapter):

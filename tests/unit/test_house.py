@@ -25,7 +25,8 @@ def _registry():
 
 
 def _job(**changes):
-    base = dict(source=SRC, target=Target(adapter="toy", model="toy"), scene=SCENE, settings=Settings(scheme="one"))
+    base = dict(source=SRC, target=Target(adapter="toy", model="toy"), scene=SCENE, settings=Settings(scheme="one"),
+                fit_same_model=True)  # a fit to report on
     return Job(**{**base, **changes})
 
 

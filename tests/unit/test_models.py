@@ -49,7 +49,7 @@ def test_the_job_passes_the_model_object_to_the_adapter():
     reg = registry_of("toy", _Recording)
     src = Material(adapter="toy", model="toy", params={"diffuse": [0.6, 0.3, 0.1], "specular": 0.8, "alpha": 0.15})
     job = Job(source=src, target=Target(adapter="toy", model="toy"), scene=ProbeScene(resolution=32),
-              settings=Settings(scheme="one", coarse=0, validation="none"), label="m.yaml")
+              settings=Settings(scheme="one", coarse=0, validation="none"), label="m.yaml", fit_same_model=True)
     resolved = resolve(job, reg)
     assert resolved.look is not None and resolved.look.alpha == pytest.approx(0.15)  # read once, from the model
     pool = AdapterPool(reg)

@@ -66,18 +66,31 @@ def test_includes_are_read_and_entities_are_not_expanded(tmp_path, formats):
         _read(formats, tmp_path / "evil.xml")
 
 
-def test_materialx_documents_of_each_shader_are_read_as_principled(formats):
+def _rule(entry):
+    """The fixed rule's Principled values of an entry read from MaterialX (the correspondence)."""
+    from brdfremap.adapters.materialx.models import MODELS
+
+    model = MODELS[entry.material.model]
+    return model.principled(model.complete(entry.material.params))
+
+
+def test_materialx_documents_are_read_as_their_own_shaders(formats):
+    """Each material is the materialx adapter's model of its shader, its inputs as written; Blender's
+    Principled BSDF is the fixed rule's reading of it, not what is rendered."""
     got = _read(formats, DATA / "materialx")
-    assert len(got) == 9 and {e.material.model for e in got.values()} == {"principled"}
-    assert all(e.material.adapter == "cycles" and "correspondence" in e.notes[0] for e in got.values())
+    assert len(got) == 9 and all(e.material.adapter == "materialx" for e in got.values())
+    assert {e.material.model for e in got.values()} == {"open_pbr_surface", "standard_surface", "gltf_pbr",
+                                                         "UsdPreviewSurface"}
     copper = got["copper"].material.params  # a MaterialX 1.38 document, upgraded on reading
-    assert copper["metallic"] == 1.0 and copper["base_color"] == (0.955, 0.638, 0.538)
+    assert copper["metalness"] == 1.0 and copper["base_color"] == (0.955, 0.638, 0.538)
     blue = got["blue_plastic"].material.params
-    assert blue["base_color"] == pytest.approx((0.045, 0.135, 0.54))  # base (0.9) times base_color
-    assert blue["sheen_weight"] == 0.3  # read, as Blender's MaterialX export maps it
+    assert blue["base"] == 0.9 and blue["sheen"] == 0.3
+    rule = _rule(got["blue_plastic"])
+    assert rule["base_color"] == pytest.approx((0.045, 0.135, 0.54))  # base (0.9) times base_color
+    assert rule["sheen_weight"] == 0.3  # as Blender's MaterialX export maps it
     assert got["wood"].textured == ["base_color <- image 'wood.png'"]
-    assert got["gold"].material.params["anisotropic"] > 0  # specular_roughness_anisotropy
-    assert got["chrome"].material.params["metallic"] == 1.0 and got["clay"].material.params["roughness"] == 0.8
+    assert _rule(got["gold"])["anisotropic"] > 0  # specular_roughness_anisotropy
+    assert _rule(got["chrome"])["metallic"] == 1.0 and got["clay"].material.params["roughness"] == 0.8
 
 
 def test_an_invalid_materialx_document_is_one_error(tmp_path, formats):
@@ -109,7 +122,8 @@ def test_openpbr_before_1_0_is_read_with_its_renames_noted(formats):
     """A published MaterialX 1.38 document (OpenPBR's own brushed aluminium) with OpenPBR's pre-1.0
     input names: read, each rename and left-out input noted."""
     got = _read(formats, DATA / "openpbr" / "open_pbr_aluminum_brushed.mtlx")["Aluminum_Brushed"]
-    assert got.material.params["anisotropic"] == pytest.approx(1.0)  # 0.9 / 0.9: its anisotropy, renamed
+    assert got.material.params["specular_roughness_anisotropy"] == pytest.approx(0.9)  # its anisotropy, renamed
+    assert _rule(got)["anisotropic"] == pytest.approx(1.0)  # 0.9 / 0.9: Disney's (Blender's) anisotropy
     assert any("specular_anisotropy is read as specular_roughness_anisotropy" in n for n in got.notes)
     assert any(n.startswith("specular_rotation = 0.25 is left out") for n in got.notes)
 
@@ -141,15 +155,18 @@ def test_a_file_that_cannot_be_read_is_listed_and_the_others_are_read(tmp_path, 
 def test_a_materialx_glass_is_tinted_by_its_transmission_colour(formats):
     """OpenPBR and Standard Surface tint a glass by transmission_color; Blender's Principled BSDF by
     Base Color: a clear water stays clear (not the default base colour's 0.8 grey)."""
-    water = _read(formats, DATA / "openpbr" / "open_pbr_water.mtlx")["Water"].material.params
+    water = _rule(_read(formats, DATA / "openpbr" / "open_pbr_water.mtlx")["Water"])
     assert water["base_color"] == (1.0, 1.0, 1.0) and water["transmission_weight"] == 1.0
-    honey = _read(formats, DATA / "openpbr" / "open_pbr_honey_liquid.mtlx")["Honey_liquid"].material.params
-    assert honey["base_color"] == pytest.approx((0.8309, 0.5709, 0.0372), abs=2e-4)  # its ACEScg colour, linear Rec.709
+    honey = _read(formats, DATA / "openpbr" / "open_pbr_honey_liquid.mtlx")["Honey_liquid"]
+    assert honey.material.params["transmission_color"] == pytest.approx((0.8309, 0.5709, 0.0372), abs=2e-4)  # ACEScg, read linear
+    assert _rule(honey)["base_color"] == pytest.approx((0.8309, 0.5709, 0.0372), abs=2e-4)
 
 
 def test_a_materialx_gltf_glass_transmits(formats, corpus):
-    """MaterialX's own glTF glass (`transmission` 1): a Principled glass, not an opaque white read
-    with a note that transmission has no counterpart."""
+    """MaterialX's own glTF glass (`transmission` 1): a transmissive model, and a Principled glass by
+    the fixed rule."""
+    from brdfremap.adapters.materialx.models import MODELS
+
     entry = _read(formats, corpus / "materialx" / "GltfPbr" / "gltf_pbr_glass.mtlx")["PBR_Glass"]
-    assert entry.material.params["transmission_weight"] == 1.0 and entry.material.params["ior"] == 1.52
-    assert not any("transmission" in n for n in entry.notes)
+    assert MODELS["gltf_pbr"].transmissive(entry.material.params)
+    assert _rule(entry)["transmission_weight"] == 1.0 and _rule(entry)["ior"] == 1.52

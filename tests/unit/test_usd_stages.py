@@ -13,7 +13,8 @@ from brdfremap.adapters.materialx.reader import standard_libraries  # noqa: E402
 from brdfremap.adapters.threejs.models import USD_PREVIEW  # noqa: E402
 from brdfremap.adapters.usd.preview import INPUTS  # noqa: E402
 from brdfremap.adapters.usd.reader import UsdReader  # noqa: E402
-from brdfremap.adapters.usd.writer import OpenPbr, UsdWriter  # noqa: E402
+from brdfremap.adapters.usd.writer import MtlxSurface, UsdWriter  # noqa: E402
+from brdfremap.adapters.materialx.models import MODELS  # noqa: E402
 from brdfremap.core.data.errors import ConfigError  # noqa: E402
 from brdfremap.core.data.textures import Texture  # noqa: E402
 from brdfremap.core.library.formats import Converted, collect_formats  # noqa: E402
@@ -52,8 +53,9 @@ def test_a_stage_s_materials_are_read_as_their_inputs_say():
     assert got["paint"].textured == ["roughness <- UsdUVTexture 'rough.png'"]
     assert got["specular"].material.params["use_specular_workflow"] == "specular"
     assert USD_PREVIEW.notes(USD_PREVIEW.complete(got["specular"].material.params))  # three.js ignores it: said
-    openpbr = got["openpbr"]
-    assert openpbr.material.model == "principled" and openpbr.material.params["coat_weight"] == 0.5
+    openpbr = got["openpbr"]  # a MaterialX shader written in USD: MaterialX's own model of it, rendered by MaterialX
+    assert (openpbr.material.adapter, openpbr.material.model) == ("materialx", "open_pbr_surface")
+    assert openpbr.material.params["coat_weight"] == 0.5
     assert any("no_such_input" in n for n in openpbr.notes)
     assert "MyRendererSurface" in got["other"].problem and "\n" not in got["other"].problem
 
@@ -77,7 +79,9 @@ def test_a_bad_layer_is_one_line_and_the_other_materials_still_read(name, words)
 
 def test_a_referenced_mtlx_document_is_read_from_its_file_or_said_missing():
     got = _read("mtlx_reference.usda")
-    assert got["gold"].material.model == "principled" and got["gold"].material.params["metallic"] == 1.0
+    gold = got["gold"].material
+    assert gold.adapter == "materialx" and MODELS[gold.model].principled(MODELS[gold.model].complete(gold.params))[
+        "metallic"] == 1.0
     assert any("usd-core has no UsdMtlx" in n for n in got["gold"].notes)
     assert got["not_here.mtlx"].unreadable and "not there" in got["not_here.mtlx"].problem
 
@@ -118,15 +122,16 @@ def test_library_usda_holds_one_material_per_result_and_reads_back(tmp_path):
                       [Converted("red paint", "principled", principled, tmp_path),
                        Converted("red paint 2", "principled", {**principled, "roughness": 0.5}, tmp_path),
                        Converted("red/paint", "principled", principled, tmp_path)],
-                      openpbr={"principled": lambda: OpenPbr(open_pbr_inputs, DIRECT)})
+                      mtlx={"principled": lambda: MtlxSurface(open_pbr_inputs, DIRECT)})
     stage = Usd.Stage.Open(str(cycles))
     materials = [UsdShade.Material(p) for p in stage.Traverse() if p.IsA(UsdShade.Material)]
     assert [m.GetPrim().GetName() for m in materials] == ["red_paint", "red_paint_2", "red_paint_3"]
     assert "approximation" in materials[0].GetPrim().GetDocumentation()
-    back = _read_back(cycles)["red_paint"].material  # its mtlx surface, the fitted Principled, read first
-    assert back.model == "principled"
-    for k, v in principled.items():
-        assert back.params[k] == pytest.approx(v, abs=1e-6), k
+    back = _read_back(cycles)["red_paint"].material  # its mtlx surface, the fitted Principled as OpenPBR, read first
+    assert (back.adapter, back.model) == ("materialx", "open_pbr_surface")
+    again = MODELS["open_pbr_surface"].principled(MODELS["open_pbr_surface"].complete(back.params))
+    for k, v in principled.items():  # the correspondence both ways: the Principled values come back
+        assert again[k] == pytest.approx(v, abs=1e-6), k
 
 
 def _read_back(path: Path) -> dict:
