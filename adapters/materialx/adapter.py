@@ -1,16 +1,17 @@
-"""The MaterialX adapter: a material rendered by the code MaterialX generates for its nodedef, as
-MaterialX's own viewer renders it. MaterialX's GLSL shader generator writes the shader and its
-`GlslRenderer` draws the probe sphere (an OBJ mesh) in a float framebuffer, on Mesa's llvmpipe (the CPU)
+"""The MaterialX adapter: a material rendered by the code MaterialX generates for its nodedef, with
+MaterialX's own shader generator and renderer (`PyMaterialXGenGlsl`, `GlslRenderer`, as its viewer
+renders), drawing the probe sphere (an OBJ mesh) into a float framebuffer on Mesa's llvmpipe (the CPU)
 under a virtual display of the worker's own (`worker.py`, one persistent process).
 
-The probe in the same physical units as every other adapter: point lights are MaterialX's `point_light`
-falling off with the square of the distance (`glsl/mx_point_light.glsl`: MaterialX's own divides by
-(distance + 1)², a real-time convention); an environment is MaterialX's lat-long lighting, its
-specular by MaterialX's filtered importance sampling (`ENV_SAMPLES` directions a pixel, from the map at
-`ENV_WIDTH` columns) and its diffuse from the map's irradiance. Pixels are the mean of
-`SUPERSAMPLE`² samples (a box filter, as a path tracer's pixel integrates its footprint; `ENV_SUPERSAMPLE`²
-under an environment, whose sampling costs `ENV_SAMPLES` times more). Deterministic: its noise is nil,
-and a render does not depend on the scene's seed or samples."""
+Where it departs from MaterialX's viewer, it is to put the probe in the same physical units as every
+other adapter: point lights are MaterialX's `point_light` falling off with the square of the distance
+(`glsl/mx_point_light.glsl`; MaterialX's own divides by (distance + 1)^decay, a real-time convention); an
+environment is MaterialX's lat-long lighting with `ENV_SAMPLES` directions a pixel for its filtered
+importance sampling (the viewer takes 16) from the map box-averaged to `ENV_WIDTH` columns, its diffuse
+from the map's irradiance. Pixels are the mean of `SUPERSAMPLE`² samples (a box filter, as a path
+tracer's pixel integrates its footprint; `ENV_SUPERSAMPLE`² under an environment, whose every sample
+costs the importance sampling). Deterministic: its noise is nil, and a render depends on neither the
+scene's seed nor its samples. Measurements: docs/measurements/materialx.md."""
 
 from __future__ import annotations
 
@@ -42,17 +43,14 @@ from brdfremap.core.run.workerproc import JsonLinesWorker
 from .models import MODELS, TRANSMISSION, MaterialXModel
 
 SUPERSAMPLE = 8
-"""Samples a pixel along each axis under point lights: the white Lambertian under the rim light (a
-crescent at the edge) is 2.1 % from the box-filtered analytic image at 8, 5.5 % at 4 (three.js's
-measure too)."""
+"""Samples a pixel along each axis under point lights."""
 ENV_SUPERSAMPLE = 4
+"""... under an environment."""
 ENV_SAMPLES = 256
-"""Directions MaterialX's filtered importance sampling takes a pixel under an environment. MaterialX's
-viewer takes 16; against 1024, a rough metal is 4 to 8 % off at 64 and 1 to 3 % at 256, whose cost is
-already 2 to 12 s for a 64² image on llvmpipe (bench/materialx_env.py)."""
+"""Directions MaterialX's filtered importance sampling takes a pixel under an environment."""
 ENV_WIDTH = 256
-"""Columns of the map the renderer is given (box-averaged down from the scene's, its light kept): its
-sampling cost grows with the map's size; a disc 24 degrees across is still 17 texels wide."""
+"""Columns of the map the renderer is given (box-averaged down from the scene's, its light kept): the
+sampling's cost grows with the map's size."""
 IRRADIANCE_SIZE = (64, 32)
 CACHE = 64
 """Images kept by scene and parameters: a render ignores the seed, so another seed's is the one kept (the
@@ -94,7 +92,7 @@ class MaterialXAdapter(Adapter):
     def unavailable_reason(cls) -> str | None:
         if importlib.util.find_spec("MaterialX") is None:
             return "the materialx package is not installed (pip install 'materialx==1.39.*')"
-        if shutil.which("Xvfb") is None:
+        if sys.platform.startswith("linux") and shutil.which("Xvfb") is None:
             return "Xvfb is not installed (apt-get install xvfb libgl1-mesa-dri): MaterialX renders on a virtual display"
         return None
 
@@ -130,7 +128,7 @@ class MaterialXAdapter(Adapter):
                lobe: str | None = None) -> np.ndarray:
         model = self.as_model(model)
         if lobe is not None:
-            raise ValueError(f"materialx: model {model.name!r} has no lobes to render alone")
+            raise RenderError(f"materialx: model {model.name!r} has no lobes to render alone")
         assert isinstance(model, MaterialXModel)
         return self.render_document(model.program_document(), model.uniforms(model.complete(params)), scene)
 
@@ -208,7 +206,7 @@ def _downsampled(px: np.ndarray, width: int) -> np.ndarray:
     h, w = px.shape[:2]
     if w <= width:
         return np.ascontiguousarray(px, np.float32)
-    rows = max(1, width // 2)
+    rows = min(h, max(1, width // 2))
     ys = np.linspace(0, h, rows + 1).astype(int)
     xs = np.linspace(0, w, width + 1).astype(int)
     sums = np.add.reduceat(np.add.reduceat(px.astype(np.float64), ys[:-1], axis=0), xs[:-1], axis=1)

@@ -86,8 +86,8 @@ QUIET = {"normal", "tangent", "geometry_normal", "geometry_coat_normal", "geomet
 
 
 def principled_values(category: str, params: dict[str, Any]) -> tuple[dict[str, Any], list[str]]:
-    """The fixed rule: a shader's complete parameters as Principled BSDF values (unclipped), and the
-    inputs away from their defaults it has no counterpart for (to be said by the caller)."""
+    """The fixed rule: a shader's complete parameters as the Principled BSDF values it maps (unclipped),
+    and the shader's inputs it has no counterpart for (the caller says those away from their defaults)."""
     table = TO_PRINCIPLED[category]
     scale, inverted = SCALE.get(category, {}), ONE_MINUS.get(category, set())
     out: dict[str, Any] = {}
@@ -111,11 +111,14 @@ def principled_values(category: str, params: dict[str, Any]) -> tuple[dict[str, 
 
 def as_they_are(category: str, params: dict[str, Any]) -> dict[str, str]:
     """The Principled parameters that are one input of the shader as it is (no weight other than 1, no
-    scale, no inversion, no gate): Principled's name, the shader's."""
+    scale, no inversion, no gate, a base colour no transmission or subsurface tint mixes into): Principled's
+    name, the shader's."""
+    tinted = any(float(params.get(TO_PRINCIPLED[category].get(w, ("",))[0], 0.0)) > 0.0 and tints.get(category)
+                 for tints, w in ((TRANSMISSION_TINT, "transmission_weight"), (SUBSURFACE_TINT, "subsurface_weight")))
     out = {}
     for pname, names in TO_PRINCIPLED[category].items():
         if pname in SCALE.get(category, {}) or pname in ONE_MINUS.get(category, set()) \
-                or pname in GATED.get(category, {}):
+                or pname in GATED.get(category, {}) or (pname == "base_color" and tinted):
             continue
         if len(names) == 1 or float(params.get(names[1], 0.0)) == 1.0:
             out[pname] = names[0]
@@ -159,8 +162,6 @@ def open_pbr_inputs(params: dict) -> dict[str, object]:
     return from_principled("open_pbr_surface", params)
 
 
-DIRECT = {"base_color": "base_color", "metallic": "base_metalness", "roughness": "specular_roughness",
-          "ior": "specular_ior", "specular_tint": "specular_color", "coat_weight": "coat_weight",
-          "coat_roughness": "coat_roughness", "transmission_weight": "transmission_weight"}
+DIRECT = as_they_are("open_pbr_surface", {"base_weight": 1.0})
 """Principled parameters that are one open_pbr_surface input as they are (an image can drive it
 directly; base_weight stays 1)."""

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Iterator, Mapping
-from typing import Any, ClassVar
+from typing import Any, Callable, ClassVar
 
 from brdfremap.core.data.appearance import Appearance
 from brdfremap.core.data.schemas import Need, ParamKind, Value
@@ -64,8 +64,8 @@ class MaterialXModel(Model):
     flags: ClassVar[dict[str, dict[str, Any]]] = {}
     """What the tool says of its inputs beyond the nodedef: fitted (`fit`), fitted where the source
     carries one (`fit_when_carried`), for a need (`fit_for`), inert, held (`ParamSpec`'s fields)."""
-    approximated: ClassVar[dict[str, str]] = {}
-    """An input whose positive value MaterialX's GLSL renders only approximately, and how."""
+    approximated: ClassVar[dict[str, tuple[Callable[[Value], bool], str]]] = {}
+    """Inputs whose values MaterialX's GLSL renders only approximately: which values, and how."""
 
     @classmethod
     def build(cls, library) -> "MaterialXModel":
@@ -75,7 +75,7 @@ class MaterialXModel(Model):
         nodedef = library.getNodeDef(cls.nodedef)
         if nodedef is None:
             raise ValueError(f"MaterialX's libraries have no {cls.nodedef}")
-        specs, _ = parameters(nodedef, cls.flags)
+        specs = parameters(nodedef, cls.flags)
         return cls(name=cls.category, parameters=specs, **cls.extra(),
                    description=f"MaterialX {cls.category} ({nodedef.getVersionString() or 'its'} nodedef "
                                f"{cls.nodedef}) as MaterialX's own GLSL renders it")
@@ -102,10 +102,15 @@ class MaterialXModel(Model):
 
     # -- conversions ---------------------------------------------------------------------------
     def principled(self, params: dict[str, Value]) -> dict[str, Value]:
-        """Blender's Principled BSDF values of these parameters by the correspondence, within its bounds."""
-        spec = _principled()
-        values, _ = principled_values(self.category, params)
-        return spec.complete(_clipped(spec, values))
+        """Blender's Principled BSDF values of these parameters by the correspondence, within its bounds (the
+        Principled BSDF's defaults for what the correspondence does not map)."""
+        return _principled().complete(self._mapped(params)[0])
+
+    def _mapped(self, params: dict[str, Value]) -> tuple[dict[str, Value], list[str]]:
+        """The Principled values the correspondence maps, clipped to its bounds, and this material's
+        inputs away from their defaults it has no counterpart for."""
+        values, loose = principled_values(self.category, params)
+        return _clipped(_principled(), values), [n for n in loose if n in self.names and params[n] != self.param(n).default]
 
     def appearance(self, params: dict[str, Value]) -> Appearance:
         """As Blender's Principled BSDF of the correspondence reads (a MaterialX metal: Schlick's Fresnel
@@ -119,18 +124,18 @@ class MaterialXModel(Model):
 
     def rule_for(self, target: Model, params: dict[str, Value]) -> Rule | None:
         """Blender's Principled BSDF by the correspondence: the values Blender's MaterialX importer and
-        exporter map by name."""
+        exporter map by name (only those: the rest stays the fit's), and the inputs it has no name for."""
         from brdfremap.adapters.cycles.models import Principled
 
         if not isinstance(target, Principled):
             return None
-        return Rule(name=f"MaterialX's {self.category} to Blender's Principled BSDF by name (the correspondence "
-                         "docs/library.md gives)", params=self.principled(params),
-                    inputs=as_they_are(self.category, params))
+        values, loose = self._mapped(params)
+        unmapped = f"; not mapped: {', '.join(loose)}" if loose else ""
+        return Rule(name=f"MaterialX's {self.category} to Blender's Principled BSDF by name (docs/materialx.md)"
+                         + unmapped, params=values, inputs=as_they_are(self.category, params))
 
     def approximations(self, params: dict[str, Value]) -> list[str]:
-        return [why for name, why in self.approximated.items()
-                if name in params and not isinstance(params[name], str) and float(params[name]) > 0.0]  # type: ignore
+        return [why for name, (drawn, why) in self.approximated.items() if name in params and drawn(params[name])]
 
 
 def _document(category: str, params: dict[str, Value], shader_name: str, uniforms, material: str = "brdfremap") -> str:
@@ -145,10 +150,23 @@ def _document(category: str, params: dict[str, Value], shader_name: str, uniform
     return m.writeToXmlString(doc)
 
 
-SUBSURFACE = ("MaterialX's GLSL draws subsurface scattering as a wrapped diffuse of its colour and radius "
-              "(mx_subsurface_scattering_approx): no light travels under the surface")
 TRANSMISSION = ("MaterialX's GLSL draws transmission as the environment refracted once through the sphere "
                 "(mx_surface_transmission): a point light is not seen through it")
+
+
+def _positive(v: Value) -> bool:
+    return max(v) > 0.0 if isinstance(v, tuple) else float(v) > 0.0  # type: ignore[arg-type]
+
+
+def _below_one(v: Value) -> bool:
+    return min(v) < 1.0 if isinstance(v, tuple) else float(v) < 1.0  # type: ignore[arg-type]
+
+
+SUBSURFACE = (_positive, "MaterialX's GLSL draws subsurface scattering as a wrapped diffuse of its colour and radius "
+                         "(mx_subsurface_scattering_approx): no light travels under the surface")
+TRANSMITS = (_positive, TRANSMISSION)
+OPAQUE = (_below_one, "MaterialX's GLSL renders here without transparency (its program is made once, opaque): a "
+                      "coverage below 1 is drawn opaque")
 
 # --------------------------------------------------------------------------------------- the models
 _CARRIED = {"fit_when_carried": True}
@@ -168,7 +186,7 @@ class OpenPbr(MaterialXModel):
              "fuzz_weight": _CARRIED, "fuzz_roughness": {**_CARRIED, "inert_when": {"fuzz_weight": 0.0}},
              "fuzz_color": {"inert_when": {"fuzz_weight": 0.0}},
              "base_diffuse_roughness": {"fit_for": (Need.ROUGH_DIFFUSE,)}}
-    approximated = {"subsurface_weight": SUBSURFACE, "transmission_weight": TRANSMISSION}
+    approximated = {"subsurface_weight": SUBSURFACE, "transmission_weight": TRANSMITS, "geometry_opacity": OPAQUE}
 
     @classmethod
     def extra(cls) -> dict[str, Any]:
@@ -190,7 +208,7 @@ class StandardSurface(MaterialXModel):
              "sheen": _CARRIED, "sheen_roughness": {**_CARRIED, "inert_when": {"sheen": 0.0}},
              "sheen_color": {"inert_when": {"sheen": 0.0}},
              "diffuse_roughness": {"fit_for": (Need.ROUGH_DIFFUSE,)}}
-    approximated = {"subsurface": SUBSURFACE, "transmission": TRANSMISSION}
+    approximated = {"subsurface": SUBSURFACE, "transmission": TRANSMITS, "opacity": OPAQUE}
 
     @classmethod
     def extra(cls) -> dict[str, Any]:
@@ -208,7 +226,7 @@ class GltfPbr(MaterialXModel):
              "clearcoat": _CARRIED, "clearcoat_roughness": {**_CARRIED, "inert_when": {"clearcoat": 0.0}},
              "anisotropy_strength": _CARRIED,
              "anisotropy_rotation": {**_CARRIED, "inert_when": {"anisotropy_strength": 0.0}}}
-    approximated = {"transmission": TRANSMISSION}
+    approximated = {"transmission": TRANSMITS, "alpha": OPAQUE}
 
     @classmethod
     def extra(cls) -> dict[str, Any]:
@@ -222,15 +240,11 @@ class UsdPreview(MaterialXModel):
     nodedef = "ND_UsdPreviewSurface_surfaceshader"
     flags = {"diffuseColor": {"fit": True}, "metallic": {"fit": True}, "roughness": {"fit": True},
              "clearcoat": _CARRIED, "clearcoatRoughness": {**_CARRIED, "inert_when": {"clearcoat": 0.0}}}
+    approximated = {"opacity": OPAQUE}
 
     @classmethod
     def extra(cls) -> dict[str, Any]:
         return {"smooth_when": {"roughness": 0.0}}
-
-    def approximations(self, params: dict[str, Value]) -> list[str]:
-        if float(params.get("opacity", 1.0)) < 1.0:  # type: ignore[arg-type]
-            return ["MaterialX's GLSL renders here without transparency: an opacity below 1 is drawn opaque"]
-        return []
 
 
 class DisneyPrincipled(MaterialXModel):
@@ -241,7 +255,7 @@ class DisneyPrincipled(MaterialXModel):
     flags = {"baseColor": {"fit": True}, "metallic": {"fit": True}, "roughness": {"fit": True},
              "specular": {"fit": True, "inert_when": {"metallic": 1.0}}, "anisotropic": _CARRIED,
              "sheen": _CARRIED, "clearcoat": _CARRIED, "clearcoatGloss": {**_CARRIED, "inert_when": {"clearcoat": 0.0}}}
-    approximated = {"specTrans": TRANSMISSION}
+    approximated = {"specTrans": TRANSMITS}
 
     @classmethod
     def extra(cls) -> dict[str, Any]:
@@ -254,7 +268,8 @@ KINDS: tuple[type[MaterialXModel], ...] = (OpenPbr, StandardSurface, GltfPbr, Us
 class Models(Mapping):
     """The adapter's models by name, built from MaterialX's libraries the first time they are asked for
     (reading the nodedefs takes MaterialX and a fraction of a second: `remap --help` needs neither);
-    none where the materialx package is missing (the adapter then says why it is unavailable)."""
+    none where the materialx package is missing (the adapter then says why it is unavailable), and
+    only those whose nodedef the installed libraries have."""
 
     @functools.cached_property
     def _models(self) -> dict[str, MaterialXModel]:
@@ -266,7 +281,7 @@ class Models(Mapping):
             library = standard_libraries()
         except ConfigError:  # no materialx package: `MaterialXAdapter.unavailable_reason` says so
             return {}
-        return {kind.category: kind.build(library) for kind in KINDS}
+        return {kind.category: kind.build(library) for kind in KINDS if library.getNodeDef(kind.nodedef) is not None}
 
     def __getitem__(self, name: str) -> MaterialXModel:
         return self._models[name]

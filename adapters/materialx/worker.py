@@ -2,9 +2,9 @@
 (`PyMaterialXGenGlsl`, `PyMaterialXRenderGlsl.GlslRenderer`) on a virtual display of its own, serving
 render requests as JSON lines.
 
-Run as ``python -m brdfremap.adapters.materialx.worker``: it starts an X server (Xvfb) on a free display
-that dies with it, opens an OpenGL context there (Mesa's llvmpipe: the CPU), answers one JSON line per
-request and exits when stdin closes. Requests:
+Run as ``python -m brdfremap.adapters.materialx.worker``: on Linux it starts an X server (Xvfb) on a free
+display that dies with it and opens an OpenGL context there (Mesa's llvmpipe: the CPU; elsewhere the
+system's own); it answers one JSON line per request and exits when stdin closes. Requests:
 ``{"op": "render", "document", "shader", "values", "sphere", "resolution", "views", "out"}``: the first
 material of a MaterialX document (XML text) on the probe sphere, one image per view stacked downwards,
 written to ``out`` as raw float32 RGB; ``values`` sets the shader node's inputs as uniforms (a new
@@ -33,24 +33,42 @@ MAX_LIGHTS = 16
 """The most point lights a view holds (a scene's limit, `core.data.scene.MAX_LIGHTS`)."""
 
 
-def start_display() -> tuple[subprocess.Popen, str]:
-    """An X server of our own on a free display (``-displayfd``), killed with this process."""
+def start_display(scratch: Path) -> subprocess.Popen | None:
+    """On Linux an X server of our own on a free display (``-displayfd``), killed with this process, and
+    DISPLAY set to it; elsewhere None (MaterialX's renderer opens a hidden window of the system's own)."""
     from brdfremap.core.run.workerproc import die_with_parent
 
+    if not sys.platform.startswith("linux"):
+        return None
     read, write = os.pipe()
+    log = open(scratch / "xvfb.log", "wb")
     try:
         server = subprocess.Popen(["Xvfb", "-displayfd", str(write), "-screen", "0", "64x64x24", "-nolisten", "tcp",
                                    "-noreset"], pass_fds=(write,), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                  stderr=subprocess.PIPE, preexec_fn=die_with_parent)
+                                  stderr=log, preexec_fn=die_with_parent)
     except FileNotFoundError:
         raise RuntimeError("Xvfb is not installed (apt-get install xvfb)") from None
-    os.close(write)
+    finally:
+        log.close()
+        os.close(write)
     with os.fdopen(read) as f:
         number = f.readline().strip()
     if not number:
-        err = server.stderr.read().decode(errors="replace").strip().splitlines() if server.poll() is not None else []
-        raise RuntimeError(f"Xvfb did not start{': ' + err[-1] if err else ''}")
-    return server, f":{number}"
+        said = (scratch / "xvfb.log").read_text(errors="replace").strip().splitlines()
+        raise RuntimeError(f"Xvfb did not start{': ' + said[-1] if said else ''}")
+    os.environ["DISPLAY"] = f":{number}"
+    return server
+
+
+def stop_display(server: subprocess.Popen | None) -> None:
+    """The X server ended as it ends itself (its lock and socket files removed), killed if it will not."""
+    if server is None:
+        return
+    server.terminate()
+    try:
+        server.wait(timeout=5)
+    except subprocess.TimeoutExpired:
+        server.kill()
 
 
 def sphere_obj(path: Path) -> None:
@@ -104,8 +122,9 @@ class Renderer:
         self.renderer.setLightHandler(self.handler)
         self.environments: dict[str, tuple] = {}
         self.black = self._image(np.zeros((1, 2, 3), np.float32))
-        self.program_key: str | None = None
+        self.program_key: tuple[str, str] | None = None
         self.shader_name = ""
+        self.uniforms: set[str] = set()
         self.background: np.ndarray | None = None
 
     def _context(self):
@@ -135,8 +154,9 @@ class Renderer:
             self.environments[key] = (self._image(np.load(radiance)), self._image(np.load(irradiance)))
 
     def program(self, document: str, shader: str) -> None:
-        """The program of this document's first material, generated and compiled where it is new."""
-        if document == self.program_key:
+        """The program of this document's first material, generated and compiled where it is new; the
+        uniforms it declares for its shader node's inputs (`set_values` sets no other)."""
+        if (document, shader) == self.program_key:
             return
         mx = self.mx
         doc = mx.createDocument()
@@ -151,11 +171,19 @@ class Renderer:
         generated = self.gen.generate("brdfremap", materials[0], self.context)
         self.renderer.createProgram(generated)
         self.renderer.validateInputs()
-        self.program_key, self.shader_name, self._doc = document, shader, doc
+        block = generated.getStage(self.mx_gen.PIXEL_STAGE).getUniformBlock(self.mx_gen.HW_PUBLIC_UNIFORMS)
+        self.uniforms = {block[i].getVariable() for i in range(block.size())}
+        self.program_key, self.shader_name, self._doc = (document, shader), shader, doc
 
     def set_values(self, values: dict[str, list[str]]) -> None:
+        """Each input's value as its uniform; an input the program does not declare is an error (the
+        renderer would ignore it, and the image would silently show the default)."""
         for name, (kind, text) in values.items():
-            self.renderer.updateUniform(f"{self.shader_name}_{name}", self.mx.Value.createValueFromStrings(text, kind))
+            uniform = f"{self.shader_name}_{name}"
+            if uniform not in self.uniforms:
+                raise ValueError(f"the shader node {self.shader_name!r} of the document has no input {name!r} "
+                                 "(a value for it would change nothing)")
+            self.renderer.updateUniform(uniform, self.mx.Value.createValueFromStrings(text, kind))
 
     def _camera(self, camera: dict, sphere: dict) -> None:
         mx, cam = self.mx, self.renderer.getCamera()
@@ -248,24 +276,34 @@ def serve(channel, renderer: Renderer, hello: dict) -> None:
 def main() -> None:
     channel = os.fdopen(os.dup(sys.stdout.fileno()), "w")
     os.dup2(sys.stderr.fileno(), sys.stdout.fileno())  # the library's prints must not corrupt the protocol
+    server = scratch = None
     try:
-        server, display = start_display()
-        os.environ["DISPLAY"] = display
-        import MaterialX as mx
         from brdfremap.core.data.scratch import scratch_dir
 
         scratch = scratch_dir("materialx-worker")
+        server = start_display(scratch)
+        import MaterialX as mx
+
         renderer = Renderer(scratch)
     except Exception as exc:  # no display, no GL context, no MaterialX: the adapter reports it in one line
         traceback.print_exc(file=sys.stderr)
-        _answer(channel, {"ok": False, "error": f"{type(exc).__name__}: {str(exc).strip().splitlines()[0] if str(exc).strip() else ''}"})
+        first = (str(exc).strip().splitlines() or [""])[0]
+        _answer(channel, {"ok": False, "error": f"{type(exc).__name__}: {first}"})
+        _end(server, scratch)
         return
     try:
-        serve(channel, renderer, {"ok": True, "materialx": mx.getVersionString(), "display": display})
+        serve(channel, renderer, {"ok": True, "materialx": mx.getVersionString(),
+                                  "display": os.environ.get("DISPLAY", "")})
     finally:
-        server.kill()
+        _end(server, scratch)
+
+
+def _end(server: subprocess.Popen | None, scratch: Path | None) -> None:
+    stop_display(server)
+    if scratch is not None:
         shutil.rmtree(scratch, ignore_errors=True)
 
 
 if __name__ == "__main__":
     main()
+    os._exit(0)  # the GL context and MaterialX's objects are the system's to free: their destructors at exit can abort

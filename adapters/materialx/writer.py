@@ -80,6 +80,9 @@ class PrincipledAsOpenPbr:
     def write(self, folder: Path, items: list[Converted]) -> list[Path]:
         from brdfremap.adapters.cycles.models import PRINCIPLED
 
+        from .models import MODELS, mx_type
+
+        openpbr = MODELS["open_pbr_surface"]
         m = mx()
         doc = m.createDocument()
         doc.setDocString("brdf-remap: materials converted to Blender's Principled BSDF, written as OpenPBR by name "
@@ -93,8 +96,8 @@ class PrincipledAsOpenPbr:
                 shader.setInputValue(key, m.Color3(*v) if isinstance(v, tuple) else float(v))
             for pname, tex in sorted(item.textures.items()):
                 if pname in DIRECT:  # an input the correspondence scales (Specular IOR Level) keeps its number
-                    _image(m, doc, shader, name, DIRECT[pname],
-                           "color3" if pname in ("base_color", "specular_tint") else "float", tex)
+                    target = openpbr.param(DIRECT[pname])
+                    _image(m, doc, shader, name, target.name, mx_type(target.kind, target.choices), tex)
             material = doc.addMaterialNode(name, shader)
             loose = sorted(set(item.textures) - set(DIRECT))
             material.setDocString(f"source material: {item.name}" + (

@@ -12,6 +12,8 @@ from brdfremap.core.data.schemas import Value
 from .preview import INPUTS, WORKFLOWS
 
 PREVIEW_TYPES = {"diffuseColor": "Color3f", "specularColor": "Color3f", "useSpecularWorkflow": "Int"}
+MTLX_TYPES = {"color3": "Color3f", "float": "Float", "integer": "Int", "boolean": "Bool"}
+"""A MaterialX shader input's type as the value type it is written with in USD."""
 """UsdPreviewSurface inputs that are not floats (Sdf value type names)."""
 PREVIEW_TEXTURED = {"diffuse_color": ("diffuseColor", "rgb"), "metallic": ("metallic", "r"),
                     "roughness": ("roughness", "r")}
@@ -85,12 +87,16 @@ def _uv_texture(stage, path: str, shader, pname: str, tex, input_name: str, outp
 
 def mtlx_surface(stage, material, node_id: str, inputs: dict[str, Value], types: dict[str, str]):
     """A MaterialX shader written directly in USD (``node_id``: ND_open_pbr_surface_surfaceshader),
-    the material's `mtlx` surface; ``types`` each input's MaterialX type."""
+    the material's `mtlx` surface; ``types`` each input's MaterialX type (a choice's value its text:
+    "true", "1")."""
     Gf, Sdf, Usd, UsdGeom, UsdShade = pxr()
-    shader = UsdShade.Shader.Define(stage, material.GetPath().AppendChild("OpenPBR"))
+    shader = UsdShade.Shader.Define(stage, material.GetPath().AppendChild("MaterialXSurface"))
     shader.CreateIdAttr(node_id)
     for name, v in inputs.items():
-        kind = "Color3f" if types.get(name) == "color3" else "Float"
+        kind = MTLX_TYPES.get(types.get(name, "float"), "Float")
+        if kind == "Bool":
+            shader.CreateInput(name, Sdf.ValueTypeNames.Bool).Set(v == "true")
+            continue
         typ, val = _value(Gf, Sdf, kind, v)
         shader.CreateInput(name, typ).Set(val)
     material.CreateSurfaceOutput("mtlx").ConnectToSource(shader.ConnectableAPI(), "surface")

@@ -52,8 +52,8 @@ class Model(ModelSpec):
         return {}
 
     def rule_for(self, target: "Model", params: dict[str, Value]) -> Rule | None:
-        """This material's parameters for ``target`` by a fixed rule its format defines (MaterialX's
-        correspondence to Blender's Principled BSDF: what an importer maps by name), or None. A fit to
+        """This material's parameters for ``target`` by a fixed rule its format defines (a correspondence
+        of its inputs to another renderer's model's: what an importer maps by name), or None. A fit to
         ``target`` starts from it, and its report gives the rule's error beside the fit's. ``params`` is
         complete. Must not render."""
         return None

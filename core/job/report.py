@@ -78,11 +78,12 @@ class Metrics(_Strict):
 
 
 class Start(_Strict):
-    informed: bool = Field(description="The fit started from the exporters' conversion of the source.")
+    informed: bool = Field(description="The fit started from the exporters' conversion of the source (or from the "
+                                       "fixed rule its format defines: `rule`).")
     params: dict[str, Any] = Field(description="That conversion, or the job's own start (`job.start`), where one "
                                                "was used.")
     rule: str = Field("", description="The fixed rule that conversion is, where the source's format defines one for "
-                                      "the target (MaterialX's correspondence to Blender's Principled BSDF): "
+                                      "the target (a correspondence of its inputs to the target's, an importer's): "
                                       "`metrics.start_error` is then the rule's own error, the fit's beside it.")
 
 

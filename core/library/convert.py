@@ -178,9 +178,9 @@ def _through_table(item: Item, dest: Destination, registry: AdapterRegistry, sce
 
 
 def _by_rule(e: Entry, registry: AdapterRegistry, tables: list[TableUse]):
-    """A textured material as another model's, by the fixed rule its format defines (MaterialX's
-    correspondence to Blender's Principled BSDF), where a given table maps that model and every image
-    drives an input the rule takes as it is: (the material, a note saying so), or None."""
+    """A textured material as another model's, by the fixed rule its format defines (`Model.rule_for`),
+    where a given table maps that model and an image drives at least one input the rule takes as it is
+    (any other image is its mean, said): (the material, a note saying so), or None."""
     src = e.material
     own = model_of(registry, src.adapter, src.model, e.file, f"{e.name}: ")
     params = own.complete(src.params, file=e.file, prefix=f"{e.name}: params")

@@ -103,16 +103,20 @@ def test_a_written_document_renders_as_its_parameters(mx, tmp_path):
 
 def test_a_bad_document_is_one_line_and_the_worker_serves_the_next(mx):
     scene = ProbeScene(resolution=16)
+    mx._images.clear()  # every render below asks the worker
     first = mx.render(*_white(mx), scene)
     with pytest.raises(RenderError) as err:
         mx.render_document('<?xml version="1.0"?><materialx version="1.39"><nodedef name="x"/></materialx>', {},
                            scene.with_(seed=7))
     assert "no material" in str(err.value)
-    assert np.array_equal(mx.render(*_white(mx), scene.with_(seed=3)), first)
+    assert np.array_equal(mx.render(*_white(mx), scene), first)  # the same seed: drawn again by the worker
+    with pytest.raises(RenderError, match="has no input 'no_such_input'"):  # a value that would change nothing
+        mx.render_document(MODELS["open_pbr_surface"].program_document(), {"no_such_input": ["float", "1"]}, scene)
 
 
 def test_a_killed_worker_is_started_again_and_its_display_dies_with_it(mx):
     scene = ProbeScene(resolution=16, seed=11)
+    mx._images.clear()  # every render below asks the worker
     mx.render(*_white(mx), scene)
     worker = psutil.Process(mx.worker.proc.pid)
     display = [p for p in worker.children() if p.name() == "Xvfb"]
@@ -120,4 +124,6 @@ def test_a_killed_worker_is_started_again_and_its_display_dies_with_it(mx):
     worker.kill()
     psutil.wait_procs([worker, *display], timeout=10)
     assert not display[0].is_running() or display[0].status() == psutil.STATUS_ZOMBIE  # the display went with it
-    assert mx.render(*_white(mx), scene.with_(seed=12)).max() > 0  # a new worker (and display) renders
+    mx._images.clear()
+    assert mx.render(*_white(mx), scene).max() > 0  # a new worker (and display) renders
+    assert mx.worker.restarts >= 1
