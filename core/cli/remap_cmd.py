@@ -52,6 +52,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE",
                    help="hold a target parameter at a value (repeatable), e.g. --fix distribution=ggx")
     p.add_argument("--force", action="store_true", help="fit again even if DIR holds the result of this same job")
+    p.add_argument("--fit-same-model", action="store_true",
+                   help="fit a source to its own model of the same renderer all the same (a test of the optimiser, "
+                        "whose answer is known); without it the source's parameters are the result, unfitted")
     options.add_settings(p)
     options.add_common(p)
     return p
@@ -89,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
             raise ConfigError("given twice: keep one", field=f"--fix {name}")
         fixed[name] = value
     job = Job(source=source, target=Target(adapter=adapter, model=args.model, fix=fixed), scene=scene,
-              settings=settings, label=str(args.source))
+              settings=settings, label=str(args.source), fit_same_model=args.fit_same_model)
     resolved = resolve(job, registry, Where(source_file=str(args.source)))
     header = (f"remap {source.adapter}:{source.model} -> {adapter}:{args.model}  ({scene.resolution}x"
               f"{scene.resolution}, {scene.spp} spp, scheme {settings.scheme}; fitting by default "

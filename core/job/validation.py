@@ -219,26 +219,6 @@ def _mean_and_noise(render, a: ProbeScene, b: ProbeScene) -> tuple[np.ndarray, f
     return ((first + second) / 2).astype(np.float32), relative_rmse(first, second) / 2
 
 
-NOISY = 0.03
-"""A side this noisy (its pair's noise, `_mean_and_noise`: a random walk under the surface, light through
-a glass) has its noise measured on a second pair too (`_steady_noise`). Opaque materials at the held-out
-samples are well below it (a fraction of a percent to 2 %), so their renders are not doubled."""
-PAIR_OFFSET = 4
-"""The second pair's seeds: this many past the first's (the target's are two past the source's)."""
-
-
-def _steady_noise(render, a: ProbeScene, b: ProbeScene, mean: np.ndarray, noise: float) -> float:
-    """A noisy side's noise, measured on a second pair of renders as well: the largest of the two pairs'
-    and of the two means' difference (√2 the mean's noise). Light that a few paths carry (fireflies) makes
-    one pair's difference a lucky draw, which would book the renders' noise as the material's error
-    (docs/validation.md). A noise-free side, or a quiet one, as it is."""
-    if noise <= NOISY:
-        return noise
-    c, d = (x.with_(seed=(x.seed + PAIR_OFFSET) % MAX_SEED) for x in (a, b))
-    other, other_noise = _mean_and_noise(render, c, d)
-    return max(noise, other_noise, relative_rmse(mean.astype(np.float64), other.astype(np.float64)) / np.sqrt(2))
-
-
 RESOLVE_FACTOR = 8
 """A condition whose noise floor is over the resolve limit is rendered again at up to this many times
 its samples, when the noise (∝ 1/√spp) predicts that brings it within the limit; else it is left
@@ -263,10 +243,8 @@ def _check(render_source, render_target, cond: Condition, a: ProbeScene, b: Prob
     src, src_noise = _mean_and_noise(render_source, a, b)
     if not np.any(src > 0):
         return None
-    src_noise = _steady_noise(render_source, a, b, src, src_noise)
     ta, tb = _other_seeds(a, b)
     tgt, tgt_noise = _mean_and_noise(render_target, ta, tb)
-    tgt_noise = _steady_noise(render_target, ta, tb, tgt, tgt_noise)
     err = relative_rmse(src, tgt)
     floor = float(np.hypot(src_noise, tgt_noise))
     if cond.given:

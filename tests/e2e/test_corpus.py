@@ -115,7 +115,8 @@ def test_the_usd_shader_ball_is_read_every_material_or_a_one_line_reason():
         models = {e.name: f"{e.material.adapter}:{e.material.model}" for e in entries if e.material is not None}
         assert len(models) == 27, models  # 7 room, 3 UsdPreviewSurface, 4 OpenPBR .mtlx, and what variants change
         assert models["copper [example_material=usdpreview_copper]"] == "threejs:usd_preview_surface"
-        assert models["gold"] == models["gold [material_model=standard_surface]"] == "cycles:principled"
+        assert models["gold"] == "materialx:open_pbr_surface"  # rendered by MaterialX, not read as Principled
+        assert models["gold [material_model=standard_surface]"] == "materialx:standard_surface"
 
 
 def test_the_usd_shader_ball_converts_and_its_library_usda_reopens(tmp_path, cycles_adapter, mitsuba_adapter):
@@ -129,7 +130,8 @@ def test_the_usd_shader_ball_converts_and_its_library_usda_reopens(tmp_path, cyc
         run, summary = _convert([stage], to, out, *FAST, *[a for n in names for a in ("--only", n)])
         assert run.returncode == 0, summary
         assert {m["name"] for m in summary["materials"]} == set(names)
-        assert {m["status"] for m in summary["materials"]} <= {"ok", "mismatch", "unreliable"}, summary
+        # unchecked: the bubblegum's subsurface as MaterialX's real-time GLSL draws it (an approximation, said)
+        assert {m["status"] for m in summary["materials"]} <= {"ok", "mismatch", "unreliable", "unchecked"}, summary
         _check(out, summary)
         written = Usd.Stage.Open(str(out / "library.usda"))
         assert sum(p.IsA(UsdShade.Material) for p in written.Traverse()) == len(names)

@@ -40,16 +40,16 @@ def test_gold_beckmann_to_ggx_writes_the_contract(tmp_path, root, mitsuba_adapte
 
 def test_identity_ggx_recovers_alpha_within_one_percent(tmp_path, root, mitsuba_adapter):
     _, r = _run(tmp_path, root, "aluminium-ggx.yaml", "--adapter", "mitsuba", "--model", "roughconductor",
-                "--start", "defaults", "--validate", "none")  # the fit's renders alone: no held-out ones
-    assert r["start"] == {"informed": False, "params": {}}
+                "--start", "defaults", "--validate", "none", "--fit-same-model")  # the fit's renders alone
+    assert r["start"] == {"informed": False, "params": {}, "rule": ""}
     assert abs(r["params"]["alpha"] / 0.3 - 1) < 0.01
     assert r["metrics"]["relative_rmse"] <= r["metrics"]["noise_floor"]
     assert r["stages"][0]["start_error"] > 10 * r["metrics"]["noise_floor"]  # it did not start at the answer
     assert r["reliable"] is True
     # From the informed start (the same model: the source's own α) it only has to confirm it.
     _, informed = _run(tmp_path / "informed", root, "aluminium-ggx.yaml", "--adapter", "mitsuba",
-                       "--model", "roughconductor", "--validate", "none")
-    assert informed["start"] == {"informed": True, "params": {"distribution": "ggx", "alpha": 0.3}}  # named: kept
+                       "--model", "roughconductor", "--validate", "none", "--fit-same-model")
+    assert informed["start"] == {"informed": True, "params": {"distribution": "ggx", "alpha": 0.3}, "rule": ""}
     assert informed["metrics"]["relative_rmse"] <= informed["metrics"]["noise_floor"]
     assert informed["renders"] < r["renders"] / 2 and informed["reliable"] is True
 
@@ -57,7 +57,7 @@ def test_identity_ggx_recovers_alpha_within_one_percent(tmp_path, root, mitsuba_
 @pytest.mark.parametrize("scheme", ["one", "two", "three"])
 def test_roughplastic_schemes(tmp_path, root, mitsuba_adapter, scheme):
     _, r = _run(tmp_path, root, "blue-plastic.yaml", "--adapter", "mitsuba", "--model", "roughplastic",
-                "--scheme", scheme, "--resolution", "64")
+                "--scheme", scheme, "--resolution", "64", "--fit-same-model")
     assert r["scheme_used"] == scheme
     assert list(dict.fromkeys(s["name"].split("@")[0] for s in r["stages"] if s["kept"])) == {"one": ["all"], "two": ["specular", "diffuse"],
                                                 "three": ["specular", "diffuse", "joint"]}[scheme]

@@ -300,3 +300,4 @@ def test_a_glossy_dielectric_is_judged_beyond_the_renderers_glossy_dielectrics_w
     assert reference_kind(Appearance(kind="dielectric", alpha=0.2, specular=(0.04,) * 3, transmission=1.0)) is None
     assert reference_kind(Appearance(kind="dielectric", diffuse=(0.5,) * 3)) is None
     _MEASURED.clear()
+
