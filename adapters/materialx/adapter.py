@@ -53,8 +53,9 @@ ENV_WIDTH = 256
 sampling's cost grows with the map's size."""
 IRRADIANCE_SIZE = (64, 32)
 CACHE = 64
-"""Images kept by scene and parameters: a render ignores the seed, so another seed's is the one kept (the
-same seed's is rendered again, which `remap check` compares bit for bit)."""
+"""Images kept by scene and parameters: a render ignores the seed and the samples, so another seed's or
+sample count's is the one kept (the same scene's is rendered again, which `remap check` compares bit for
+bit)."""
 ALUMINIUM = ((1.66, 0.88, 0.52), (9.22, 6.27, 4.84))
 
 
@@ -110,7 +111,7 @@ class MaterialXAdapter(Adapter):
         self.worker = JsonLinesWorker([sys.executable, "-m", "brdfremap.adapters.materialx.worker"], name="materialx")
         self.scratch: Path | None = None
         self._maps: dict[str, dict[str, str]] = {}
-        self._images: OrderedDict[str, tuple[int, np.ndarray]] = OrderedDict()
+        self._images: OrderedDict[str, tuple[tuple[int, int], np.ndarray]] = OrderedDict()
         self.renders = 0
 
     def describe(self) -> dict[str, Any]:
@@ -141,7 +142,10 @@ class MaterialXAdapter(Adapter):
                    "sphere": {"center": list(scene.sphere.center), "radius": scene.sphere.radius}, "views": views}
         key = hashlib.sha256(json.dumps(request, sort_keys=True).encode()).hexdigest()
         kept = self._images.get(key)
-        if kept is not None and kept[0] != scene.seed:  # another seed's: the same image (the same seed: drawn again)
+        if kept is not None and kept[0] != (scene.seed, scene.spp):
+            # Another seed's or sample count's: the same image (a validation's "more samples" drew every
+            # environment again, 498 s of a ketchup's conversion). The same scene again is drawn again:
+            # that is how a determinism check asks.
             self._images.move_to_end(key)
             return kept[1].copy()
         out = self._dir() / "render.raw"
@@ -149,7 +153,7 @@ class MaterialXAdapter(Adapter):
         self.renders += 1
         img = np.fromfile(out, np.float32).reshape(len(views) * scene.resolution, scene.resolution, 3)
         img = img if scene.views else check_image(img, scene, "materialx")
-        self._images[key] = (scene.seed, img)
+        self._images[key] = ((scene.seed, scene.spp), img)
         if len(self._images) > CACHE:
             self._images.popitem(last=False)
         return img.copy()

@@ -114,6 +114,17 @@ def test_a_bad_document_is_one_line_and_the_worker_serves_the_next(mx):
         mx.render_document(MODELS["open_pbr_surface"].program_document(), {"no_such_input": ["float", "1"]}, scene)
 
 
+def test_another_seed_or_sample_count_is_served_from_the_cache_and_the_same_scene_drawn_again(mx):
+    """MaterialX's GLSL has no sampling noise: a validation's "more samples" or another seed is the image
+    it has (each environment render is tens of seconds), the very same scene is drawn by the worker."""
+    scene = ProbeScene(resolution=16, seed=21, spp=16)
+    mx._images.clear()
+    first, drawn = mx.render(*_white(mx), scene), mx.renders
+    assert np.array_equal(mx.render(*_white(mx), scene.with_(spp=128)), first) and mx.renders == drawn
+    assert np.array_equal(mx.render(*_white(mx), scene.with_(seed=22)), first) and mx.renders == drawn
+    assert np.array_equal(mx.render(*_white(mx), scene), first) and mx.renders == drawn + 1
+
+
 def test_a_killed_worker_is_started_again_and_its_display_dies_with_it(mx):
     scene = ProbeScene(resolution=16, seed=11)
     mx._images.clear()  # every render below asks the worker
