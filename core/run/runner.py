@@ -77,6 +77,7 @@ class Runner:
                 raise ConfigError(f"{stored.problem}; nothing was overwritten (or remove that result to redo it)")
             if self.reuse and stored.report is not None and stored.report.key == t.job.key():
                 found[i] = Done(t, stored.report, resumed=True)
+                self.store.tidy(t.slot)  # a staging folder a kill left after the result was in place
             else:
                 why = stored.problem or ("its inputs, the engine or a renderer changed" if stored.report else "")
                 todo.append((i, t, why if self.reuse else ""))

@@ -140,6 +140,11 @@ class Store:
         report = self.inspect(slot).report
         return report if report is not None and report.key == key else None
 
+    def tidy(self, slot: str) -> None:
+        """What a killed write left in the slot (a staging folder; the result was whole before the
+        kill, or its swap is put back), for a run that owns the store and reuses the result there."""
+        _tidy(self.folder(slot))
+
     def save(self, slot: str, outcome: Outcome) -> list[Path]:
         """Write the outcome's files and its report into the slot; return the paths written."""
         folder = self.folder(slot)

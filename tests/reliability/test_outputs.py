@@ -98,6 +98,22 @@ def test_stale_files_of_an_earlier_result_and_a_killed_write_go(tmp_path, mitsub
     assert not (out / ".staging-killed").exists() and (out / "mine.txt").read_text() == "the user's"
 
 
+def test_a_killed_writes_staging_folder_goes_when_the_result_there_is_reused(tmp_path, mitsuba_adapter):
+    """A kill after a material's result was moved into place and before its staging folder went (a
+    sweep's kill -9 left one): the rerun reuses the result and removes the staging folder."""
+    out = tmp_path / "o"
+    convert = ("convert", GOLD, "--to", "mitsuba:roughconductor", "--out", out, "--resolution", "32", "--validate",
+               "none", "--quiet")
+    assert remap(*convert).returncode == 0
+    (slot,) = (out / "materials").iterdir()
+    (slot / ".staging-killed").mkdir()
+    (slot / ".staging-killed" / "result.json").write_bytes(b"{}")
+    kept = (slot / "result.json").stat().st_mtime_ns
+    assert remap(*convert).returncode == 0
+    assert (slot / "result.json").stat().st_mtime_ns == kept  # reused, not written again
+    assert not (slot / ".staging-killed").exists()
+
+
 def test_results_are_readable_by_others_under_the_usual_umask(tmp_path, mitsuba_adapter):
     """Case 11: files get what the umask gives (0644 under 022), not mkstemp's 0600."""
     out = tmp_path / "o"
