@@ -1,13 +1,16 @@
 """What a render costs each adapter, and the least time a library's renders can take at their samples.
 
-    python bench/render_cost.py [--keep DIR] [--reps 5]
+    python bench/render_cost.py [--keep DIR] [--reps 5] [--materialx]
 
 Measures, in this process, each adapter's seconds per render of the default probe (an opaque
 material, a parameter changed before each render as a fit does) at several resolutions and
 samples, and fits seconds = fixed + per_sample * pixels * samples by least squares. With --keep
 (a folder `bench/convert.py --keep DIR` left, Mitsuba to Cycles), prints for each side of that library's jobs the
 renders and pixel-samples it made, the seconds they took, and the seconds the cost model says
-they need: what is left to win without rendering fewer samples."""
+they need: what is left to win without rendering fewer samples. With --materialx, the materialx
+adapter's seconds a render by resolution under a point light and under the studio: a rasteriser's cost
+follows its pixels (8 x 8 samples each under point lights, 4 x 4 and 256 importance samples under an
+environment), not the scene's samples. `make demo` (Mitsuba to Cycles) renders nothing with it."""
 
 from __future__ import annotations
 
@@ -48,6 +51,36 @@ def cost_model(adapter, model: str, params: dict, moved: str, reps: int) -> tupl
     return float(fixed), float(per_sample)
 
 
+def _median_seconds(adapter, model, scene: ProbeScene, base: dict, rough: str, reps: int) -> float:
+    """Median seconds a render of ``model`` on ``scene``, its ``rough`` changed each time (no cache)."""
+    times = []
+    for i in range(reps + 1):
+        params = model.complete({**base, rough: 0.3 + 1e-3 * i})
+        t0 = time.perf_counter()
+        adapter.render(model, params, scene)
+        if i:  # the first compiles and warms
+            times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+def materialx_costs(pool, reps: int) -> None:
+    """The materialx adapter's median seconds a render (an OpenPBR copper), against Cycles' Principled on
+    the same scene in the same run: under the probe's point light, and under the studio at the
+    resolutions environments are rendered at (the held-out check's 32 px, a fit's 64 px)."""
+    from brdfremap.core.data.scene import EnvironmentLight
+
+    mx, cy = pool["materialx"], pool["cycles"]
+    mxm, cym = mx.models["open_pbr_surface"], cy.models["principled"]
+    studio = [EnvironmentLight(type="environment", map="studio")]
+    print(f"\n{'open_pbr_surface vs principled':30} {'materialx s':>11} {'cycles s':>9} {'ratio':>6}")
+    for label, res, lights in (("point light", 32, None), ("point light", 64, None), ("point light", 128, None),
+                               ("studio", 32, studio), ("studio", 64, studio)):
+        scene = ProbeScene(resolution=res) if lights is None else ProbeScene(resolution=res, lights=lights)
+        m = _median_seconds(mx, mxm, scene, {"base_color": (0.9, 0.6, 0.4)}, "specular_roughness", reps)
+        c = _median_seconds(cy, cym, scene, {"base_color": (0.9, 0.6, 0.4)}, "roughness", reps)
+        print(f"{f'{label}, {res} px':30} {m:11.2f} {c:9.2f} {m / c:6.1f}")
+
+
 def library_sides(keep: Path) -> dict[str, dict[str, float]]:
     """Renders, pixel-samples and seconds by side over a kept library's distinct jobs."""
     sides: dict[str, dict[str, float]] = {}
@@ -68,13 +101,16 @@ def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--keep", type=Path, help="a folder bench/convert.py --keep left (source Mitsuba, target Cycles)")
     ap.add_argument("--reps", type=int, default=5)
+    ap.add_argument("--materialx", action="store_true", help="also the materialx adapter's seconds a render")
     args = ap.parse_args()
     models = {}
-    with open_adapters(registry(), sorted({a for a, _ in CASES})) as pool:
+    with open_adapters(registry(), sorted({a for a, _ in CASES} | ({"materialx", "cycles"} if args.materialx else set()))) as pool:
         print(f"{'adapter:model':22} {'fixed ms/render':>15} {'ns/pixel-sample':>16}")
         for (name, model), (params, moved) in CASES.items():
             models[name, model] = cost_model(pool[name], model, params, moved, args.reps)
             print(f"{name + ':' + model:22} {models[name, model][0] * 1e3:15.1f} {models[name, model][1] * 1e9:16.0f}")
+        if args.materialx:
+            materialx_costs(pool, args.reps)
     if args.keep:
         renderer = {"source": ("mitsuba", "roughconductor"), "target": ("cycles", "principled")}
         print(f"\n{'side':7} {'renders':>7} {'Mpx*spp':>8} {'seconds':>8} {'at the cost model':>18}")
