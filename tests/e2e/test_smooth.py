@@ -23,8 +23,8 @@ def test_a_smooth_silver_is_fitted_under_the_environment(tmp_path, mitsuba_adapt
 @pytest.mark.xfail(strict=False, reason=(
     "the fit leaves Au's eta/k (its informed start, 1.85 % under the fit's disc, within the 2.27 % noise) for "
     "another pair 0.19 % better there that the frontal disc cannot tell apart: under the rim disc at 2048 spp the "
-    "fitted pair is 5.41 % off and the start 0.36 % (issue filed 2026-12-07); fails here and on CI since it was "
-    "written, so the verdict `unreliable` is right about the result"))
+    "fitted pair is 5.41 % off and the start 0.36 % (bench/held_out_converged.py); fails here and on CI since it "
+    "was written, so the verdict `unreliable` is right about the result"))
 def test_a_near_mirror_gold_to_the_same_family_is_ok_under_every_held_out_light(tmp_path, mitsuba_adapter,
                                                                                  cycles_adapter):
     """Issue 43's case: Mitsuba's GGX gold at alpha 0.01 to Cycles' Metallic BSDF was unreliable (5.2 %
