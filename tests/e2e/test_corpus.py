@@ -79,6 +79,13 @@ def test_one_file_of_each_kind_that_went_wrong_converts(corpus, tmp_path, mitsub
     assert status["bsdf_pplastic/object_bsdf"]["status"] == "unsupported"  # listed, with its reason
     assert status["bsdf_dielectric_glass/object_bsdf"]["status"] != "mismatch"  # light through it, alike
     _check(tmp_path / "m", summary)
+
+
+@pytest.mark.slow
+def test_one_materialx_file_of_each_kind_that_went_wrong_converts(corpus, tmp_path, mitsuba_adapter):
+    """About 7 minutes on two cores (a smooth chrome and a glass rendered by MaterialX under environments,
+    tens of seconds each): `make test-all`. MaterialX sources stay in the default suite through
+    tests/e2e/test_convert_materialx.py and the shader ball."""
     mtlx = [corpus / "materialx" / "OpenPbr" / "open_pbr_glass.mtlx", corpus / "materialx" / "StandardSurface" /
             "standard_surface_chrome.mtlx", OPENPBR / "open_pbr_aluminum_brushed.mtlx", OPENPBR / "open_pbr_banana.mtlx"]
     run, summary = _convert([str(p) for p in mtlx], "mitsuba", tmp_path / "x", *FAST)
