@@ -44,7 +44,8 @@ def _textures(t) -> str:
 def _verdict(r: Report) -> str:
     """The status and why (an unchecked result names the lights that judged it and those that could not)."""
     word = {"ok": "ok", "mismatch": "MISMATCH", "unreliable": "UNRELIABLE", "unchecked": "UNCHECKED"}[r.verdict]
-    return word if r.reliable else f"{word}: {r.reason}"
+    told = r.as_verdict().told
+    return f"{word}: {told}" if told else word
 
 
 def _start(r: Report) -> tuple[str, str]:

@@ -131,6 +131,13 @@ class Metered:
                 self._ledger.add(self._side, sum(_pixel_samples(r[2]) for r in requests), time.perf_counter() - t0,
                                  renders=len(requests))
 
+    def render_native(self, native: Any, scene: Any, lobe: str | None = None, transmissive: bool = False) -> Any:
+        t0 = time.perf_counter()
+        try:
+            return self._adapter.render_native(native, scene, lobe, transmissive)
+        finally:
+            self._ledger.add(self._side, _pixel_samples(scene), time.perf_counter() - t0)
+
     def render_textured(self, model: Any, params: dict, maps: Any, scene: Any) -> Any:
         t0 = time.perf_counter()
         try:

@@ -307,6 +307,19 @@ class SameMaterial(_Note):
                "nothing was fitted or rendered to judge them"
 
 
+class UniformTarget(_Note):
+    """The source is rendered as its file holds it, with inputs driven by images or node graphs, and the
+    target is one uniform material: fitted to, and judged against, the source's own rendering, its error
+    holding the variation a uniform material cannot follow. Said in the verdict's reason whatever it is."""
+
+    kind: Literal["uniform_target"] = "uniform_target"
+    driven: list[str] = Field(description="The source's inputs driven by an image or a graph, in words.")
+
+    def sentence(self) -> str:
+        return (f"the target is uniform where the source is not ({'; '.join(self.driven)}): fitted to the source "
+                "as rendered, its error includes what a uniform material cannot follow")
+
+
 class ValidationSkipped(_Note):
     kind: Literal["validation_skipped"] = "validation_skipped"
     condition: Lighting
@@ -493,7 +506,8 @@ FINDINGS = (ErrorAboveThreshold, ModelMismatch, TableMismatch, HeldOutAbove, Ren
             TransportUnchecked, CannotResolve, ImagePrecision, NoEffect, IllConditioned, NotAtMinimum,
             PinnedOnBound, RendererAlters, ValidationSkipped, NothingFitted, TableLookup, TexturedAbove, TexturedNotes,
             StartKept, ChoiceTried, SmoothHeld, SchemeChosen, DeadParameters,
-            JointRefined, PredictionNotRealised, NoisePolished, InputsTried, Approximated, SameMaterial)
+            JointRefined, PredictionNotRealised, NoisePolished, InputsTried, Approximated, SameMaterial,
+            UniformTarget)
 Finding = Annotated[Union[FINDINGS], Field(discriminator="kind")]
 
 FindingKind = StrEnum("FindingKind", {c.model_fields["kind"].default.upper(): c.model_fields["kind"].default
@@ -555,7 +569,16 @@ class Verdict(Strict):
     @property
     def reason(self) -> str:
         """The unreliable findings' sentences, joined; else what was not checked and what was; "ok"
-        when neither."""
+        when neither. A uniform target for a textured source is said in any case (`UniformTarget`)."""
+        return self.told or "ok"
+
+    @property
+    def told(self) -> str:
+        """What the verdict has to tell beside its status: `reason`, "" where that would be "ok"."""
+        uniform = [f.message for f in self.findings if isinstance(f, UniformTarget)]
+        return "; ".join(x for x in [self._reason(), *uniform] if x)
+
+    def _reason(self) -> str:
         if self.problems:
             drawn = [f for f in self.findings if isinstance(f, Approximated)]
             return "; ".join(f.message for f in [*self.problems, *drawn])
@@ -566,4 +589,4 @@ class Verdict(Strict):
             checked = lights[0].checked
             return "; ".join(f.message for f in self.unchecked) + (
                 f"; checked under {', '.join(checked)}" if checked else "; checked under no light")
-        return "ok"
+        return ""

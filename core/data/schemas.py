@@ -316,6 +316,25 @@ class ModelSpec(_Strict):
         return {**params, **self.lobes[lobe].overrides}
 
 
+class Native(_Strict):
+    """A material as its own file holds it (a node tree in a .blend): its renderer renders it from the
+    file (`Adapter.render_native`), whatever a reader could make of it. The material's `model` and
+    `params` are then only its reading, which chooses the target model and the fit's start; an empty
+    `model` is a material with no reading (`core.host.model.AS_WRITTEN`)."""
+
+    file: str = Field(description="The file that holds it (absolute); not in a job's key.")
+    name: str = Field(description="The material's name in that file.")
+    sha256: str = Field(description="The file's content: a changed file is another job.")
+    driven: tuple[str, ...] = Field((), description="Its inputs driven by an image or a node graph, in words "
+                                                    "(\"base_color <- image 'wood.png'\"): a uniform target cannot "
+                                                    "follow them, and its result says so.")
+    transmits: bool = Field(False, description="Light may pass through it (a glass, a translucent or subsurface "
+                                               "node): rendered with the paths through the sphere.")
+    element: str = Field("", description="The material's own text where its renderer loads it from text (a Mitsuba "
+                                         "`<bsdf>` element, its files made absolute); '' where the adapter reads "
+                                         "`file` itself.")
+
+
 class Material(_Strict):
     """A material file: which adapter and model, and its parameters."""
 
@@ -326,6 +345,8 @@ class Material(_Strict):
     textures: dict[str, Texture] = Field(default_factory=dict, description="Parameters driven by an image, texel by "
                                                                             "texel (its `params` value is the one "
                                                                             "used without the texture).")
+    native: Native | None = Field(None, description="The material rendered from its own file as written; its "
+                                                    "`params` are then its reading (see `Native`).")
 
 
 def _holds(when: dict[str, float], params: dict[str, Any]) -> bool:

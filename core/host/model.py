@@ -19,7 +19,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..data.appearance import Appearance
-from ..data.schemas import ModelSpec, Value
+from ..data.schemas import ModelSpec, ParamSpec, Value
+from ..data.kinds import ParamKind
 
 
 @dataclass(frozen=True)
@@ -73,3 +74,16 @@ class Model(ModelSpec):
         """What the renderer does to these parameters that the image cannot show the optimiser,
         e.g. a reflectance it trims to conserve energy. A note makes a fitted result unreliable."""
         return []
+
+
+AS_WRITTEN = Model(
+    name="as written",
+    description="A material with no reading: rendered from its own file as written (`Material.native`), its "
+                "parameters unknown to the tool. Nothing of it is fitted; it gives no start and chooses no target "
+                "model (the target adapter's candidates are fitted, `Adapter.candidates`).",
+    parameters=(ParamSpec(name="transmission", kind=ParamKind.SCALAR, default=0.0, fit=False,
+                          description="1 where light may pass through it (a glass, a translucent or subsurface node "
+                                      "in its graph): rendered with paths through the sphere."),),
+    transmits_with="transmission",
+)
+"""The source model of a material rendered as written with no reading (`Material.native`, its `model` empty)."""

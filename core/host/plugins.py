@@ -44,6 +44,11 @@ class AdapterEntry:
     def light_types(self) -> frozenset[str]:
         return frozenset(getattr(self.factory, "light_types", frozenset({"point"})))
 
+    @property
+    def natives(self) -> bool:
+        """Whether it renders a material from its own file (`Adapter.natives`)."""
+        return bool(getattr(self.factory, "natives", False))
+
     def scene_problem(self, scene) -> str | None:
         """Why this adapter cannot render ``scene`` (`Adapter.scene_problem`), or None."""
         check = getattr(self.factory, "scene_problem", None)

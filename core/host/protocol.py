@@ -12,7 +12,7 @@ import numpy as np
 from ..data.appearance import Appearance
 from ..data.errors import ConfigError, RemapError, RenderError
 from ..data.scene import ProbeScene
-from ..data.schemas import Value
+from ..data.schemas import Native, Value
 from ..data.textures import Texture, TextureMap
 from .model import Model
 
@@ -46,6 +46,12 @@ class Adapter(abc.ABC):
     textures: ClassVar[bool] = False
     """Whether it renders textures (`render_textured`) and writes them into its native files, for the
     parameters each model lists as `texturable`."""
+    natives: ClassVar[bool] = False
+    """Whether it renders a material from its own file as written (`render_native`: a .blend's node
+    tree, whatever a reader makes of it)."""
+    native_lobes: ClassVar[bool] = False
+    """Whether `render_native` renders the lobes of any material apart (Cycles' render passes); else a
+    source rendered as written is fitted in one stage."""
     calibration: ClassVar[tuple[str, dict] | None] = None
     """A white diffuse material of albedo 0.8 (model, params), which `remap check` renders against
     the analytic radiance; None: the adapter has none to offer."""
@@ -107,6 +113,20 @@ class Adapter(abc.ABC):
         `core.data.textures`' texture coordinates; the other parameters as ``params`` gives them. Only
         for an adapter whose ``textures`` is true."""
         raise RenderError(f"adapter {self.name!r} does not render textures")
+
+    def render_native(self, native: Native, scene: ProbeScene, lobe: str | None = None,
+                      transmissive: bool = False) -> np.ndarray:
+        """Render the probe sphere with a material as its own file holds it (``native``: the file, the
+        material's name in it), as `render` does a model's; ``lobe`` as `render`'s, where the renderer
+        separates lobes of any material (render passes), else a RenderError. Only for an adapter whose
+        ``natives`` is true."""
+        raise RenderError(f"adapter {self.name!r} does not render a material from its own file")
+
+    def candidates(self) -> "list[ModelChoice]":
+        """The models a material with no reading is fitted to when the user names only this adapter
+        (`Material.native` with no model), the most general first, each with why: the first is fitted,
+        the others where it comes back a mismatch or unreliable, and the best is kept. Must not render."""
+        return []
 
     def render_batch(self, requests: list[tuple[Model, dict[str, Value], ProbeScene, str | None]]) -> list[np.ndarray]:
         """Several renders (model, params, scene, lobe) at once; an adapter with several workers

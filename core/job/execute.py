@@ -24,7 +24,7 @@ import numpy as np
 from ..data.account import Ledger, Metered, purpose
 from ..data.atomic import why
 from ..data.errors import RemapError, RenderError
-from ..data.findings import SameMaterial, SmoothHeld, Verdict
+from ..data.findings import SameMaterial, SmoothHeld, UniformTarget, Verdict
 from ..data.imageio import write_exr, write_previews
 from ..data.schemas import Lobe, ParamKind, Value
 from ..data.settings import FitScene, Inputs, Start
@@ -128,7 +128,7 @@ def run_in_worker(resolved: Resolved, renderer_files: tuple[str, ...] = ()) -> O
 def source_highlight(source: CachedRenderer, resolved: Resolved, scene: ProbeScene) -> float:
     """The pixels the source's highlight covers on ``scene`` (`highlight_pixels`): of its specular lobe
     where it isolates one (a plastic's, not its diffuse shading), else of its image."""
-    spec = resolved.source_spec.lobes.get(Lobe.SPECULAR)
+    spec = resolved.source_spec.lobes.get(Lobe.SPECULAR) if source.separates_lobes else None
     lobe = Lobe.SPECULAR if spec is not None and not spec.empty else None
     return highlight_pixels(source(resolved.source_params, lobe, scene=scene))
 
@@ -148,7 +148,7 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
     ledger = Ledger()
     src_adapter, tgt_adapter = Metered(adapters[src.adapter], "source", ledger), Metered(adapters[tgt.adapter],
                                                                                           "target", ledger)
-    source = CachedRenderer(src_adapter, src.adapter, resolved.source_spec, job.scene)
+    source = CachedRenderer.source(src_adapter, src.adapter, resolved.source_spec, job.scene, src.native)
     target = CachedRenderer(tgt_adapter, tgt.adapter, resolved.target_spec, job.scene)
     if progress:
         progress("source", 0, float("nan"))
@@ -173,7 +173,8 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
             if resolved.textured is not None else None
     notes = lookup_notes(job) + (textured_findings(texturing.record, job.settings.threshold,
                                                    job.settings.resolve_limit) if texturing else []) + \
-        ([SmoothHeld(held=smooth)] if smooth else [])
+        ([SmoothHeld(held=smooth)] if smooth else []) + \
+        ([UniformTarget(driven=list(src.native.driven))] if src.native is not None and src.native.driven else [])
     result = remap(resolved.target_spec, {**resolved.base, **start}, free, renders, job.settings, job.tuning,
                    progress, alternatives=alternatives(resolved, start, smooth) if informed else [], notes=notes,
                    needed=needed(resolved, start) if free and job.settings.inputs == Inputs.NEEDED else {})

@@ -21,7 +21,7 @@ from ..data.model import Strict
 from ..data.scene import MAX_SPP, ProbeScene
 from ..data.appearance import Appearance
 from ..data.schemas import Material, ModelSpec, ParamKind, Value
-from ..host.model import Model, Rule
+from ..host.model import AS_WRITTEN, Model, Rule
 from .texturing import TexturedStep
 from ..data.settings import Settings
 from ..engine.tuning import ENGINE_VERSION, Tuning
@@ -78,7 +78,8 @@ class Job(Strict):
         not of labels, names or notes."""
         doc = {
             "engine": ENGINE_VERSION,
-            "source": self.source.model_dump(mode="json", exclude={"name", "textures"}),
+            "source": self.source.model_dump(mode="json", exclude={"name": True, "textures": True,
+                                                                   "native": {"file"}}),
             "target": self.target.model_dump(mode="json"),
             "scene": json.loads(self.scene.cache_key()),
             "settings": self.settings.model_dump(mode="json"),
@@ -158,8 +159,21 @@ class Resolved:
         job = self.job
         return (not job.fit_same_model
                 and (job.source.adapter, job.source.model) == (job.target.adapter, job.target.model)
-                and job.lookup is None and job.start is None and self.textured is None
+                and job.lookup is None and job.start is None and self.textured is None and job.source.native is None
                 and all(self.source_params.get(k) == v for k, v in self.fixed.items()))
+
+
+def source_model(registry: AdapterRegistry, material: Material, file: str | None, prefix: str) -> Model:
+    """A source's model: its adapter's (`model_of`), or `AS_WRITTEN` for a material its renderer renders
+    from its own file with no reading (`Material.native`, no model), where that adapter renders such."""
+    if material.native is not None:
+        entry = registry.get(material.adapter, file=file, field_name=f"{prefix}adapter")
+        if not entry.natives:
+            raise ConfigError(f"adapter {material.adapter!r} does not render a material from its own file",
+                              file=file, field=f"{prefix}native")
+        if not material.model:
+            return AS_WRITTEN
+    return model_of(registry, material.adapter, material.model, file, prefix)
 
 
 def model_of(registry: AdapterRegistry, adapter: str, model: str, file: str | None, prefix: str) -> Model:
@@ -184,7 +198,7 @@ def resolve(job: Job, registry: AdapterRegistry, where: Where = Where(),
     source's job is a table's lookup, and ``textured`` its remap texel by texel
     (`core.textured.texture_result`, from the rooms above that know tables)."""
     src = job.source
-    src_spec = model_of(registry, src.adapter, src.model, where.source_file, where.source_prefix)
+    src_spec = source_model(registry, src, where.source_file, where.source_prefix)
     if src.textures and job.lookup is None:
         raise ConfigError(f"drives {', '.join(sorted(src.textures))} by images: a fit remaps one uniform material; "
                           "remap a textured one texel by texel through a table (--table TABLE, built with `remap "

@@ -15,7 +15,7 @@ from ..data.account import purpose
 from ..data.appearance import Appearance
 from ..data.metrics import relative_rmse
 from ..data.scene import Lighting, ProbeScene
-from ..data.schemas import Lobe, Value
+from ..data.schemas import Lobe, Native, Value
 from ..host.model import Model
 from ..engine.levels import Level
 from ..engine.results import Agreement, Validation
@@ -47,6 +47,13 @@ def _first_view(scene: ProbeScene) -> str:
 class CachedRenderer:
     """One adapter's model, rendered through a cache; ``cache.misses`` counts real renders."""
 
+    @classmethod
+    def source(cls, adapter: Adapter, name: str, model: Model, scene: ProbeScene,
+               native: Native | None) -> "CachedRenderer":
+        """A job's source: its model's renders, or its own file's (`NativeRenderer`)."""
+        return cls(adapter, name, model, scene) if native is None else NativeRenderer(adapter, name, model, scene,
+                                                                                      native)
+
     def __init__(self, adapter: Adapter, name: str, model: Model, scene: ProbeScene):
         self.adapter, self.name, self.model, self.scene = adapter, name, model, scene
         self.cache = RenderCache()
@@ -63,10 +70,15 @@ class CachedRenderer:
 
         def render():
             self.by_resolution[sc.resolution, sc.spp] += 1
-            return check_image(plugin_call(self.adapter.render, self.who, self.model, dict(params), sc, lobe), sc,
-                               self.who)
+            return check_image(self._render(params, lobe, sc), sc, self.who)
 
         return self.cache.get_or_render(self._key(params, lobe, sc), render)
+
+    def _render(self, params: dict[str, Value], lobe: str | None, scene: ProbeScene) -> np.ndarray:
+        return plugin_call(self.adapter.render, self.who, self.model, dict(params), scene, lobe)
+
+    separates_lobes = True
+    """Whether it renders the lobes its source model declares (`ModelSpec.lobes`) apart."""
 
     def many(self, items: list[tuple[dict[str, Value], str | None]], scene: ProbeScene | None = None) -> None:
         """Render the uncached ones of several requests in one batch (in parallel where the adapter can)."""
@@ -94,6 +106,34 @@ class CachedRenderer:
         """Renders by "32px", "128px" (the scene's samples) and e.g. "128px@64spp" (more samples)."""
         spp = self.scene.spp
         return {f"{res}px" + ("" if n == spp else f"@{n}spp"): v for (res, n), v in sorted(self.by_resolution.items())}
+
+
+class NativeRenderer(CachedRenderer):
+    """A source material rendered from its own file as written (`Material.native`), through a cache:
+    ``params`` are its reading's and change nothing of the image (the transmission of `AS_WRITTEN`
+    decides the paths traced)."""
+
+    def __init__(self, adapter: Adapter, name: str, model: Model, scene: ProbeScene, native: Native):
+        super().__init__(adapter, name, model, scene)
+        self.native = native
+        self.who = f"adapter {name!r} material {native.name!r} of {native.file}"
+
+    def _key(self, params: dict[str, Value], lobe: str | None, scene: ProbeScene) -> str:
+        return render_key(self.name, f"native:{self.native.sha256}", {"material": self.native.name},
+                          scene.cache_key(), lobe)
+
+    def _render(self, params: dict[str, Value], lobe: str | None, scene: ProbeScene) -> np.ndarray:
+        transmissive = self.native.transmits or self.model.transmissive(params)
+        return plugin_call(self.adapter.render_native, self.who, self.native, scene, lobe, transmissive)
+
+    def many(self, items, scene=None) -> None:
+        """One at a time (a material of a file is rendered by the adapter's own worker)."""
+
+    @property
+    def separates_lobes(self) -> bool:  # type: ignore[override]
+        """Where the adapter tells any material's lobes apart (`Adapter.native_lobes`: Cycles' render
+        passes); else none (the fit is one stage)."""
+        return bool(getattr(self.adapter, "native_lobes", False))
 
 
 class _AtScene:
@@ -153,7 +193,7 @@ class ProbeRenders:
         then serves the full image from it, where a full image alone is rendered without them."""
         if not lobes:
             return self.source(self.source_params, scene=scene), {}
-        specs = {lobe: self.source_spec.lobes.get(lobe) for lobe in Lobe}
+        specs = {lobe: self.source_spec.lobes.get(lobe) if self.source.separates_lobes else None for lobe in Lobe}
         rendered = {lobe: self.source(self.source_params, lobe, scene=scene)
                     for lobe, spec in specs.items() if spec is not None and not spec.empty}
         full = self.source(self.source_params, scene=scene)

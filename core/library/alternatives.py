@@ -22,7 +22,12 @@ from .records import ItemStatus
 if TYPE_CHECKING:
     from .convert import Item
 
-RANK = {ItemStatus.OK: 0, ItemStatus.UNCHECKED: 1, ItemStatus.MISMATCH: 2, ItemStatus.UNRELIABLE: 3}
+RANK = {ItemStatus.OK: 0, ItemStatus.UNCHECKED: 1, ItemStatus.MISMATCH: 2, ItemStatus.UNRELIABLE: 2}
+"""A mismatch and an unreliable result rank alike, by their worst error (the fit scene's or a held-out
+light's, `Tried.worst`): neither is to be trusted as it stands, a fit 5 % off whose held-out lights are 40 %
+off is worse than a mismatch 16 % off everywhere, and a fit 0.1 % off whose rim light parts 18 % from the
+source's at a noisy floor is better than a model 50 % off (a node group's Principled BSDF, fitted from no
+reading, was kept as a Diffuse BSDF when the verdict ranked first)."""
 RETRY = (ItemStatus.MISMATCH, ItemStatus.UNRELIABLE)
 """The verdicts that send a material to the adapter's other models."""
 
@@ -47,8 +52,16 @@ class Tried:
     def error(self) -> float:
         return math.inf if self.done.report is None else self.done.report.metrics.relative_rmse
 
-    def rank(self) -> tuple[int, float]:
-        return RANK.get(self.status, len(RANK)), self.error
+    @property
+    def worst(self) -> float:
+        """The largest of its errors: the fit scene's and each held-out condition's."""
+        if self.done.report is None:
+            return math.inf
+        held = [c.error for c in getattr(self.done.report, "validation", None) or ()]
+        return max([self.error, *held])
+
+    def rank(self) -> tuple[int, float, float]:
+        return RANK.get(self.status, len(RANK)), self.worst if RANK.get(self.status) == 2 else 0.0, self.error
 
     def said(self) -> str:
         return f"{self.model} {self.error:.1%} {self.status}" if self.done.report else f"{self.model} failed"
@@ -64,9 +77,10 @@ def retries(items: list[Item], adapter, make_task) -> list[tuple[Item, ModelChoi
     ``adapter`` offers for its reading; ``make_task(item, slot, choice, title)`` makes one."""
     out = []
     for item in items:
-        if item.look is None or item.status not in RETRY:
+        if item.status not in RETRY or (item.look is None and not item.candidates):
             continue
-        for choice in adapter.alternatives(item.look):
+        others = adapter.alternatives(item.look) if item.look is not None else item.candidates[1:]
+        for choice in others:
             title = f"{item.entry.name} (also {_tag(choice)}: {item.model} came back {item.status})"
             try:
                 out.append((item, choice, make_task(item, f"{item.slot}~{_tag(choice)}", choice, title)))

@@ -23,8 +23,9 @@ from ..data.schemas import Material
 from ..data.settings import Settings
 from ..data.textures import Texture
 from ..host.plugins import AdapterRegistry
+from ..host.protocol import ModelChoice
 from ..job.execute import IMAGES, AdapterPool
-from ..job.job import Job, Target, Where, model_of, resolve
+from ..job.job import Job, Target, Where, model_of, resolve, source_model
 from ..run.executors import Workers
 from ..run.runner import Done, Runner, Task
 from ..run.store import Store, owned
@@ -69,6 +70,9 @@ class Item:
     """A textured material no table maps: converted with its textures' constants (said on its line)."""
     look: Appearance | None = None
     """The source read in neutral terms, where the adapter chose the model from it (`model_for`)."""
+    candidates: list[ModelChoice] = field(default_factory=list)
+    """A material with no reading: the target adapter's models it is fitted to (`Adapter.candidates`), the
+    first fitted, the others where it comes back a mismatch or unreliable."""
     tried: list[Tried] = field(default_factory=list)
     """Every model fitted for it, the kept one among them, where more than one was (`core.library.alternatives`)."""
 
@@ -154,14 +158,16 @@ def _through_table(item: Item, dest: Destination, registry: AdapterRegistry, sce
                 why = because
     if not answers:
         inputs = ", ".join(sorted(src.textures))
-        item.entry = e.model_copy(update={
-            "notes": [*e.notes, f"textured inputs ({inputs}) converted with their constant values: {why}"],
-            "material": src.model_copy(update={"textures": {}})})
+        said = (f"textured inputs ({inputs}): a uniform material fitted to the source as its renderer renders it, "
+                f"starting from the images' means: {why}") if src.native is not None else \
+            f"textured inputs ({inputs}) converted with their constant values: {why}"
+        item.entry = e.model_copy(update={"notes": [*e.notes, said], "material": src.model_copy(update={"textures": {}})})
         item.flattened = True
         return False
     use, answer = min(answers, key=lambda ua: (ua[1].lookup.expected_error is None, ua[1].lookup.expected_error or 0.0))
     t = use.table
-    mean = src.model_copy(update={"params": {**src.params, **answer.values}})
+    # The texel-by-texel remap renders the reading's model with its maps; its uniform job, the reading at the maps' means.
+    mean = src.model_copy(update={"params": {**src.params, **answer.values}, "native": None})
     job = Job(source=mean, target=t.spec.target, scene=scene, settings=settings, label=f"{e.file}: {e.name}",
               lookup=answer.lookup.model_copy(update={"file": use.file}))
     where = Where(source_file=e.file, params_prefix=f"{e.name}: params", target_file=use.file,
@@ -247,15 +253,18 @@ def _prepare(item: Item, dest: Destination, registry: AdapterRegistry, adapters:
     e, src = item.entry, item.entry.material
     fix: dict = {}
     item.model = dest.model or ""
-    if src.adapter == dest.adapter:
+    if src.adapter == dest.adapter and src.model:
         if dest.model is None:
             item.model, item.why = src.model, "its own model (the source is already this adapter's)"
         _task(item, dest, fix, registry, scene, settings)
         return
-    model = model_of(registry, src.adapter, src.model, e.file, f"{e.name}: ")
+    model = source_model(registry, src, e.file, f"{e.name}: ")
     item.look = model.appearance(model.complete(src.params, file=e.file, prefix=f"{e.name}: params"))
     if dest.model is None:
         choice = adapters[dest.adapter].model_for(item.look) if item.look is not None else None
+        if item.look is None and src.native is not None:  # no reading: the adapter's candidates, best kept
+            item.candidates = adapters[dest.adapter].candidates()
+            choice = item.candidates[0] if item.candidates else None
         if choice is None:
             raise ConfigError(f"adapter {dest.adapter!r} cannot choose a model for it: give --to "
                               f"{dest.adapter}:MODEL (models: {', '.join(sorted(registry.get(dest.adapter).models))})")
@@ -266,7 +275,8 @@ def _prepare(item: Item, dest: Destination, registry: AdapterRegistry, adapters:
 def _task(item: Item, dest: Destination, fix: dict, registry: AdapterRegistry, scene: ProbeScene,
           settings: Settings) -> None:
     e = item.entry
-    title = f"{e.name} (its textures as constants: no table maps it)" if item.flattened else e.name
+    title = e.name if not item.flattened else f"{e.name} (textured: a uniform material fitted to its rendering)" \
+        if e.material.native is not None else f"{e.name} (its textures as constants: no table maps it)"
     item.task = model_task(item, item.slot, dest.adapter, item.model, fix, title, registry, scene, settings)
 
 

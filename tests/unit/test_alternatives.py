@@ -17,25 +17,38 @@ PLASTIC = Appearance(kind=Kind.DIELECTRIC, alpha=0.2, distribution="beckmann", s
 SCHLICK_METAL = Appearance(kind=Kind.CONDUCTOR, alpha=0.1, distribution="ggx", specular=(0.9, 0.7, 0.3))
 
 
-def _done(slot, verdict, error):
-    report = SimpleNamespace(verdict=verdict, metrics=SimpleNamespace(relative_rmse=error))
+def _done(slot, verdict, error, held=()):
+    report = SimpleNamespace(verdict=verdict, metrics=SimpleNamespace(relative_rmse=error),
+                             validation=[SimpleNamespace(error=e) for e in held])
     return Done(Task(slot, None, slot), report, resumed=False)
 
 
-def _item(status, error):
+def _item(status, error, held=()):
     item = Item(Entry(name="m", file="f.mtlx"), slot="m-1", model="roughconductor", why="a metal", look=SCHLICK_METAL)
-    item.done = _done("m-1", status, error)
+    item.done = _done("m-1", status, error, held)
     return item
 
 
 def test_the_best_verdict_then_the_least_error_is_kept_and_every_try_said():
     item = _item("mismatch", 0.42)
-    item.tried = [Tried("principled", "Schlick's Fresnel", _done("m-1~principled", "mismatch", 0.16)),
-                  Tried("roughconductor", "Beckmann", _done("m-1~roughconductor-beckmann", "unreliable", 0.05))]
+    item.tried = [Tried("principled", "Schlick's Fresnel", _done("m-1~principled", "mismatch", 0.16, held=[0.2])),
+                  Tried("roughconductor", "Beckmann", _done("m-1~roughconductor-beckmann", "unreliable", 0.05,
+                                                            held=[0.4]))]
     keep_best(item)
     assert item.model == "principled" and item.slot == "m-1~principled"
     assert "kept over roughconductor 42.0% mismatch, roughconductor 5.0% unreliable" in item.why
     assert len(item.tried) == 3
+    item = _item("ok", 0.04)
+    item.tried = [Tried("principled", "Schlick's Fresnel", _done("m-1~principled", "mismatch", 0.01))]
+    keep_best(item)
+    assert item.model == "roughconductor"  # ok first, whatever the errors
+
+
+def test_a_mismatch_and_an_unreliable_result_rank_by_their_worst_error():
+    item = _item("mismatch", 0.496, held=[0.99])  # a Diffuse BSDF for a node group's Principled BSDF
+    item.tried = [Tried("principled", "no reading", _done("m-1~principled", "unreliable", 0.001, held=[0.18]))]
+    keep_best(item)
+    assert item.model == "principled"
 
 
 def test_the_first_choice_stays_where_nothing_does_better_and_says_so():
