@@ -7,6 +7,7 @@ output. Images travel as uncompressed float32 multi-part EXR files in /dev/shm."
 from __future__ import annotations
 
 import importlib.util
+import json
 import os
 import sys
 import threading
@@ -21,7 +22,7 @@ from brdfremap.core.data.errors import ConfigError, RenderError
 from brdfremap.core.host.model import Model
 from brdfremap.core.protocol import Adapter, ModelChoice
 from brdfremap.core.data.scene import ProbeScene
-from brdfremap.core.data.schemas import Lobe, TRANSMISSION_DEPTH, Value
+from brdfremap.core.data.schemas import Lobe, Native, TRANSMISSION_DEPTH, Value
 from brdfremap.core.data.textures import Texture, TextureMap
 from brdfremap.core.data.scratch import scratch_dir
 from brdfremap.core.run.workerproc import JsonLinesWorker
@@ -134,6 +135,8 @@ class CyclesAdapter(Adapter):
     metals = {kind: ("metallic", {"distribution": "ggx", "roughness": r, "ior": (1.66, 0.88, 0.52),
                                   "extinction": (9.22, 6.27, 4.84)}) for kind, r in (("smooth", 0.1), ("rough", 0.3))}
     textures = True
+    natives = True
+    native_lobes = True
     max_cached = 8
 
     @classmethod
@@ -316,6 +319,34 @@ class CyclesAdapter(Adapter):
                     os.unlink(f)
                 except OSError:
                     pass
+
+    def render_native(self, native: Native, scene: ProbeScene, lobe: str | None = None,
+                      transmissive: bool = False) -> np.ndarray:
+        """A material of a user's .blend as the file holds it, on the probe mesh; a lobe from the same
+        render passes as a model's (any node tree's diffuse and glossy closures fill them)."""
+        key = json.dumps({"native": [native.sha256, native.name], "scene": scene.document(),
+                          "transmissive": transmissive}, sort_keys=True)
+        passes = self._cached(key, lobe)
+        if passes is None:
+            self.renders += 1
+            req = {"op": "render_native", "path": str(Path(native.file).resolve()), "name": native.name,
+                   "sha256": native.sha256, "scene": scene.document(), "depth": depth(transmissive)}
+            out = os.path.join(self.scratch, f"r{self.renders}.exr")
+            try:
+                self.worker.request({**req, "out": out, "passes": lobe is not None})
+                passes = read_passes(out, PASSES if lobe is not None else PASSES[:1])
+            finally:
+                try:
+                    os.unlink(out)
+                except OSError:
+                    pass
+            self._keep(key, passes)
+        return lobe_image(passes, lobe)
+
+    def candidates(self) -> list[ModelChoice]:
+        return [ModelChoice("principled", {}, "no reading: the Principled BSDF, Cycles' most general model"),
+                ModelChoice("metallic", {}, "no reading: the Metallic BSDF, a conductor's Fresnel"),
+                ModelChoice("diffuse", {}, "no reading: the Diffuse BSDF")]
 
     def render_saved(self, path: Path, name: str, scene: ProbeScene, transmissive: bool = False) -> np.ndarray:
         """A material of a .blend file (a library or material.blend this tool wrote), rendered on the

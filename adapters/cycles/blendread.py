@@ -26,8 +26,12 @@ def read_materials(bpy) -> list[dict]:
 
 
 def _material(bpy, mat, defaults) -> dict:
+    """The material's reading where its surface is one of the models' nodes, and whether Cycles must
+    render it from the file as it is (``native``): no reading (a Mix Shader, a node group, any other
+    node), or one that leaves something out (an input driven by a texture or a graph, an input with no
+    counterpart); ``transmits`` where light may pass through it."""
     entry = {"name": mat.name, "model": None, "params": {}, "problem": "", "textured": [], "notes": [],
-             "textures": {}}
+             "textures": {}, "native": False, "transmits": False}
     tree = mat.node_tree if mat.use_nodes else None
     outputs = [n for n in tree.nodes if n.type == "OUTPUT_MATERIAL"] if tree else []
     output = next((n for n in outputs if n.is_active_output), outputs[0] if outputs else None)
@@ -38,12 +42,85 @@ def _material(bpy, mat, defaults) -> dict:
     if not links:
         entry["problem"] = "nothing is connected to the Material Output's Surface"
         return entry
+    entry["transmits"] = _transmits(tree) or output.inputs["Volume"].is_linked
+    entry["driven"] = _spatial(tree)
     node = links[0].from_node
     model = BY_TYPE.get(node.type)
+    if node.type in AS_PRINCIPLED:
+        _read_as(node, entry, *AS_PRINCIPLED[node.type])
+        return entry
     if model is None:
-        entry["problem"] = f"its surface is a {node.bl_label} node ({node.type}): not a BSDF this tool reads"
+        entry["native"] = True
+        entry["notes"].append(f"its surface is the {node.bl_label} node {node.name!r}: no reading, rendered by "
+                              "Cycles as the file holds it")
         return entry
     entry["model"] = model
+    _read(bpy, node, model, entry, defaults)
+    entry["native"] = bool(entry["textured"] or entry["notes"])
+    return entry
+
+
+AS_PRINCIPLED = {
+    "BSDF_GLASS": ({"base_color": "Color", "roughness": "Roughness", "ior": "IOR"},
+                   {"transmission_weight": 1.0, "metallic": 0.0, "distribution": "ggx"}),
+}
+"""Surface nodes read as a Principled BSDF by correspondence (the reading chooses the target and starts the
+fit; Cycles renders the node itself): {param: input}, and the Principled values that make it that node."""
+
+
+def _read_as(node, entry: dict, inputs: dict[str, str], fixed: dict) -> None:
+    entry.update(model="principled", native=True)
+    entry["params"].update(fixed)
+    for pname, sock in inputs.items():
+        socket = input_socket(node, sock)
+        if socket.is_linked:
+            entry["textured"].append(f"{pname} <- {_source(socket.links[0].from_node)}")
+        entry["params"][pname] = _plain(socket.default_value)
+    entry["notes"].append(f"its surface is the {node.bl_label} node {node.name!r}: read as a Principled BSDF "
+                          f"({', '.join(f'{k} {v}' for k, v in fixed.items())}) to choose the target and start the "
+                          "fit; rendered by Cycles as the file holds it")
+
+
+TRANSMITTING = {"BSDF_GLASS", "BSDF_REFRACTION", "BSDF_TRANSLUCENT", "BSDF_TRANSPARENT", "SUBSURFACE_SCATTERING",
+                "BSDF_HAIR", "BSDF_HAIR_PRINCIPLED", "BSDF_SHEEN_VOLUME", "PRINCIPLED_VOLUME"}
+"""Nodes through which light may pass (a Principled BSDF: by its transmission or subsurface weight)."""
+
+
+def _transmits(tree, seen=None) -> bool:
+    seen = set() if seen is None else seen
+    for node in tree.nodes:
+        if node.type in TRANSMITTING:
+            return True
+        if node.type == "BSDF_PRINCIPLED" and any(
+                input_socket(node, name).is_linked or input_socket(node, name).default_value > 0.0
+                for name in ("Transmission Weight", "Subsurface Weight")):
+            return True
+        group = getattr(node, "node_tree", None)
+        if node.type == "GROUP" and group is not None and group.name not in seen:
+            seen.add(group.name)
+            if _transmits(group, seen):
+                return True
+    return False
+
+
+def _spatial(tree, seen=None) -> list[str]:
+    """The texture and attribute nodes whose output is used: what makes the material vary over the
+    surface (a Fresnel or Layer Weight varies with the angle only, which a uniform material can follow)."""
+    seen = set() if seen is None else seen
+    out = []
+    for node in tree.nodes:
+        if (node.type.startswith("TEX_") or node.type in ("ATTRIBUTE", "VERTEX_COLOR")) and \
+                any(o.is_linked for o in node.outputs):
+            out.append(_source(node))
+        group = getattr(node, "node_tree", None)
+        if node.type == "GROUP" and group is not None and group.name not in seen:
+            seen.add(group.name)
+            out += _spatial(group, seen)
+    return out
+
+
+def _read(bpy, node, model: str, entry: dict, defaults) -> None:
+    """The node's unconnected inputs as the model's parameters; what it cannot carry in the notes."""
     _, inputs, props = NODES[model]
     for pname, prop in props.items():
         entry["params"][pname] = str(getattr(node, prop)).lower()
@@ -69,7 +146,6 @@ def _material(bpy, mat, defaults) -> dict:
                 _differs(_plain(socket.default_value), base.get(socket.name)):
             entry["notes"].append(f"{socket.name} = {_shown(socket.default_value)} has no counterpart in the "
                                   f"{model!r} model: ignored")
-    return entry
 
 
 LINEAR_SPACES = {"Non-Color", "Linear Rec.709", "Raw", "Linear"}

@@ -4,14 +4,15 @@ through a Blender worker process of its own, never bpy in this process."""
 
 from __future__ import annotations
 
+import hashlib
 import sys
 from pathlib import Path
 
 from brdfremap.core.data.atomic import temp_beside, write_text_atomic
 from brdfremap.core.data.errors import ConfigError, RenderError
 from brdfremap.core.library.formats import Converted, Entry, clip_into
-from brdfremap.core.data.schemas import Material
-from brdfremap.core.data.textures import texture
+from brdfremap.core.data.schemas import Material, Native
+from brdfremap.core.data.textures import mean_value, read_values, texture
 from brdfremap.core.run.workerproc import JsonLinesWorker
 
 from .adapter import texture_request
@@ -52,12 +53,23 @@ class BlendReader:
             raise ConfigError(f"Blender cannot read it: {str(exc).splitlines()[0]}", file=str(path)) from None
         finally:
             worker.close()
-        return [_entry(m, str(path)) for m in found]
+        digest = hashlib.sha256(Path(path).read_bytes()).hexdigest()
+        return [_entry(m, str(path), digest) for m in found]
 
 
-def _entry(m: dict, file: str) -> Entry:
+def _entry(m: dict, file: str, digest: str) -> Entry:
+    """A material the worker read: its reading (a model's parameters, an image's input as the image's
+    mean), and the file itself where Cycles renders it as the file holds it (`Native`)."""
+    native = Native(file=str(Path(file).resolve()), name=m["name"], sha256=digest,
+                    driven=tuple([*m["textured"], *(d for d in m.get("driven", []) if not any(
+                        t.endswith(d) for t in m["textured"]))]),
+                    transmits=m.get("transmits", False)) if m.get("native") else None
     if m["model"] is None:
-        return Entry(name=m["name"], file=file, problem=m["problem"], notes=m["notes"])
+        if native is None:
+            return Entry(name=m["name"], file=file, problem=m["problem"], notes=m["notes"])
+        return Entry(name=m["name"], file=file, notes=m["notes"], textured=list(native.driven),
+                     material=Material(adapter="cycles", model="", name=m["name"], native=native,
+                                       params={"transmission": 1.0} if native.transmits else {}))
     params = {k: tuple(v) if isinstance(v, list) else v for k, v in m["params"].items()}
     try:
         notes = clip_into(MODELS[m["model"]], params) + m["notes"]
@@ -67,11 +79,14 @@ def _entry(m: dict, file: str) -> Entry:
     for pname, t in m.get("textures", {}).items():
         try:
             textures[pname] = texture(t["file"], t["colorspace"], t["filter"], where=f"{m['name']}: {pname}")
+            params[pname] = MODELS[m["model"]].param(pname).clip(mean_value(read_values(
+                textures[pname], MODELS[m["model"]].param(pname).kind, where=f"{m['name']}: {pname}")))
         except ConfigError as exc:
+            textures.pop(pname, None)
             notes.append(f"{pname}: {exc}: read as its constant")
     return Entry(name=m["name"], file=file, notes=notes, textured=m["textured"],
                  material=Material(adapter="cycles", model=m["model"], params=params, name=m["name"],
-                                   textures=textures))
+                                   textures=textures, native=native))
 
 
 class BlendLibraryWriter:

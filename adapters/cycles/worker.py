@@ -120,7 +120,7 @@ class SceneBuilder:
     def _build(self, sc_json: dict) -> None:
         bpy = self.bpy
         bpy.ops.wm.read_factory_settings(use_empty=True)
-        self.materials = {}
+        self.materials, self.natives = {}, {}
         scene = bpy.context.scene
         r = scene.render
         r.engine = "CYCLES"
@@ -225,6 +225,17 @@ class SceneBuilder:
         scene.collection.objects.link(obj)
 
 
+def _nodes_of(tree, seen=None):
+    """A node tree's nodes, those of the node groups it uses included (each group once)."""
+    seen = set() if seen is None else seen
+    for node in tree.nodes:
+        yield node
+        group = getattr(node, "node_tree", None)
+        if node.type == "GROUP" and group is not None and group.name not in seen:
+            seen.add(group.name)
+            yield from _nodes_of(group, seen)
+
+
 class MaterialNodes:
     """Materials as node trees: one per model, reused and updated in place; a textured one made
     for its request and dropped after it."""
@@ -302,6 +313,7 @@ class BlenderState(SceneBuilder, MaterialNodes):
         self.scene_key = None
         self.passes = None
         self.materials = {}
+        self.natives = {}
         self.probes = None
         self.depth = None
 
@@ -372,6 +384,34 @@ class BlenderState(SceneBuilder, MaterialNodes):
         finally:
             self.drop(mat)
 
+    def render_native(self, req: dict) -> dict:
+        """A material of a user's .blend as the file holds it (its whole node tree, node groups and
+        images), appended once and kept for the next request of the same file's content, on the probe
+        mesh (its UV map, tangents and generated coordinates)."""
+        t0 = time.perf_counter()
+        self.setup_scene(req["scene"])
+        key = (req["path"], req["name"], req["sha256"])
+        if key not in self.natives:
+            self.natives[key] = self.append(req["path"], req["name"])
+        self.probes.use(self.natives[key], True)
+        return self._render(req, t0)
+
+    def append(self, path: str, name: str):
+        """A material appended from a .blend (running nothing the file holds: no driver's expression, no
+        script), its images checked."""
+        self.bpy.context.preferences.filepaths.use_scripts_auto_execute = False
+        with self.bpy.data.libraries.load(path, link=False, relative=False) as (src, dst):
+            if name not in src.materials:
+                raise KeyError(f"{path} holds no material {name!r} (it holds {list(src.materials)})")
+            dst.materials = [name]
+        mat = dst.materials[0]
+        missing = [n.image.filepath for n in _nodes_of(mat.node_tree) if n.type == "TEX_IMAGE" and n.image is not None
+                   and n.image.source == "FILE" and n.image.packed_file is None and not os.path.exists(
+                       self.bpy.path.abspath(n.image.filepath, library=n.image.library))]
+        if missing:
+            raise FileNotFoundError(f"material {name!r}: its images are not found: {missing}")
+        return mat
+
     def save_blend(self, req: dict) -> dict:
         textures = req.get("textures") or {}
         if not textures:
@@ -408,7 +448,8 @@ class BlenderState(SceneBuilder, MaterialNodes):
 
         self.bpy.context.preferences.filepaths.use_scripts_auto_execute = False
         self.bpy.ops.wm.open_mainfile(filepath=req["path"], load_ui=False, use_scripts=False)
-        self.scene_key, self.materials = None, {}  # the probe scene is gone: rebuilt at the next render
+        # the probe scene is gone: rebuilt at the next render
+        self.scene_key, self.materials, self.natives = None, {}, {}
         return {"materials": read_materials(self.bpy)}
 
 
@@ -445,6 +486,8 @@ def main() -> int:
                 result = state.render(req)
             elif op == "save_blend":
                 result = state.save_blend(req)
+            elif op == "render_native":
+                result = state.render_native(req)
             elif op == "render_saved":
                 result = state.render_saved(req)
             elif op == "save_library":

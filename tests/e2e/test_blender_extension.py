@@ -61,14 +61,14 @@ def test_every_operator_works_headless_on_real_files(extension_zip, tmp_path, co
     assert copy["result"] == ["FINISHED"] and copy["panel"][1].startswith("copper: ")
     assert log["before accept"] == {"copper": {"users": 1, "bsdf": "BSDF_GLOSSY"},
                                     "red paint": {"users": 1, "bsdf": "BSDF_PRINCIPLED"},
-                                    "mixed": {"users": 1, "bsdf": "MIX_SHADER"}}  # nothing changed yet
+                                    "empty": {"users": 1, "bsdf": None}}  # nothing changed yet
     after = log["accept copy"]["materials"]
     assert after["copper"] == {"users": 1, "bsdf": "BSDF_GLOSSY"}  # a copy: the original stays
     assert after["copper (metallic)"]["bsdf"] == "BSDF_METALLIC"
 
     unsupported = log["remap unsupported"]
     assert unsupported["result"] == ["FINISHED"] and "accept" not in unsupported["panel"][0]  # nothing to accept
-    assert unsupported["panel"][1].startswith("mixed: unsupported, –"), unsupported["panel"]  # with its reason
+    assert unsupported["panel"][1].startswith("empty: unsupported, –"), unsupported["panel"]  # with its reason
 
     placed = log["accept in place"]["materials"]
     assert placed["red paint"] == {"users": 1, "bsdf": "BSDF_METALLIC"}  # the sphere uses the remap
