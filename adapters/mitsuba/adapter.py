@@ -16,7 +16,7 @@ from brdfremap.core.data.atomic import write_text_atomic
 from brdfremap.core.data.errors import ConfigError, RenderError
 from brdfremap.core.protocol import Adapter, ModelChoice
 from brdfremap.core.data.scene import PointLight, ProbeScene
-from brdfremap.core.data.schemas import ParamKind, TRANSMISSION_DEPTH, Value
+from brdfremap.core.data.schemas import Native, ParamKind, TRANSMISSION_DEPTH, Value
 from brdfremap.core.data.textures import ColourSpace, Texture, TextureMap
 
 from . import appearance as _appearance
@@ -160,6 +160,7 @@ class MitsubaAdapter(Adapter):
     metals = {kind: ("roughconductor", {"material": "none", "distribution": "ggx", "alpha": a, "eta": (1.66, 0.88, 0.52),
                                         "k": (9.22, 6.27, 4.84)}) for kind, a in (("smooth", 0.01), ("rough", 0.09))}
     textures = True
+    natives = True
     max_scenes = 8
 
     @classmethod
@@ -292,6 +293,40 @@ class MitsubaAdapter(Adapter):
             _reraise_interrupt(exc)
             raise RenderError(f"mitsuba textured render failed ({model.name}, textures {sorted(maps)}): {exc}") from exc
         return np.array(img, dtype=np.float32)[..., :3]
+
+    def render_native(self, native: Native, scene: ProbeScene, lobe: str | None = None,
+                      transmissive: bool = False) -> np.ndarray:
+        """A BSDF as its scene file writes it (`Native.element`, loaded by Mitsuba as it is), on the probe
+        sphere. A lobe of it cannot be told apart (a RenderError): its fit is one stage."""
+        mi = self.mi
+        if lobe is not None:
+            raise RenderError(f"mitsuba: a BSDF rendered as written has no {lobe} lobe of its own to render")
+        key = ("native", native.sha256, transmissive, scene.cache_key())
+        if key not in self._scenes:
+            try:
+                bsdf = mi.load_string(native.element)
+                doc = self.scene_dict("diffuse", model_of("diffuse").complete({}), scene)
+                doc["integrator"] = integrator(scene, transmissive)
+                doc["probe"]["bsdf"] = bsdf
+                self._scenes[key] = (mi.load_dict(doc), None, {}, {})
+            except Exception as exc:
+                _reraise_interrupt(exc)
+                raise RenderError(f"mitsuba could not load {native.name!r} of {native.file} as written: "
+                                  f"{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from exc
+            if len(self._scenes) > self.max_scenes:
+                self._scenes.popitem(last=False)
+        self._scenes.move_to_end(key)
+        try:
+            img = mi.render(self._scenes[key][0], seed=scene.seed, spp=scene.spp)
+        except Exception as exc:
+            _reraise_interrupt(exc)
+            raise RenderError(f"mitsuba render of {native.name!r} as written failed: {exc}") from exc
+        return np.array(img, dtype=np.float32)[..., :3]
+
+    def candidates(self) -> list[ModelChoice]:
+        return [ModelChoice("principled", {}, "no reading: Mitsuba's principled BSDF, its most general model"),
+                ModelChoice("roughconductor", {"material": "none"}, "no reading: a rough conductor"),
+                ModelChoice("roughplastic", {}, "no reading: a rough plastic")]
 
     def model_for(self, appearance: Appearance) -> ModelChoice:
         return ModelChoice(*_appearance.model_for(appearance))

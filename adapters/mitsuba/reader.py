@@ -9,6 +9,7 @@ reference is resolved, and nothing a file names is run."""
 
 from __future__ import annotations
 
+import hashlib
 import math
 import re
 import xml.etree.ElementTree as ET
@@ -18,7 +19,7 @@ import numpy as np
 
 from brdfremap.core.data.errors import ConfigError
 from brdfremap.core.library.formats import Entry, clip_into
-from brdfremap.core.data.schemas import Material, ParamKind, Value
+from brdfremap.core.data.schemas import Material, Native, ParamKind, Value
 from brdfremap.core.data.textures import LUMA, Texture, read_values, texture
 
 from .blend import COMPONENTS, SLOTS
@@ -32,8 +33,20 @@ NAMED_IOR = {"vacuum": 1.0, "helium": 1.00004, "hydrogen": 1.00013, "air": 1.000
              "amber": 1.55, "pet": 1.5750, "diamond": 2.419}
 WRAPPERS = {"twosided": "two-sided (unwrapped)", "bumpmap": "its bump map is ignored",
             "normalmap": "its normal map is ignored", "mask": "its opacity mask is ignored"}
-NOT_YET = {"measured": "a measured BRDF", "hair": "hair",
-           "pplastic": "polarized plastic", "polarizer": "a polarizer", "retarder": "a retarder", "null": "a null BSDF"}
+NO_RENDERER = {
+    "hair": "hair is drawn along fibres (a curve's tangent), and the probe is a sphere: no renderer here draws it as its "
+            "author's scene does",
+    "polarizer": "a polarizer acts on the polarization of light, which the adapter's RGB variant does not carry: no "
+                 "renderer here shows what it does",
+    "retarder": "a retarder acts on the polarization of light, which the adapter's RGB variant does not carry: no "
+                "renderer here shows what it does",
+    "measured_polarized": "a polarized measured BRDF (a pBSDF file) renders only in Mitsuba's polarized spectral "
+                          "variants, and the adapter renders in an RGB one: no renderer here renders it",
+    "null": "a null BSDF is not a surface: nothing to remap"}
+"""BSDF types listed as unsupported, and why: what no renderer here renders."""
+AS_WRITTEN = {"measured": "", "pplastic": "roughplastic"}
+"""BSDF types the adapter's variant renders that no model reads exactly: rendered by Mitsuba from the element as
+written (`Material.native`), each with the model that reads it to start the fit ("": none)."""
 ALPHAS = MODELS["roughconductor"]
 """Where alpha_u and alpha_v are described (for a model that reads them as one alpha)."""
 CONVERTED = {"principled": ("eta",)}
@@ -152,20 +165,102 @@ def _substitute(text: str, defaults: dict[str, str], path: Path) -> str:
 
 def _entry(doc: _Document, elem: ET.Element, name: str, file: str) -> Entry:
     notes: list[str] = []
+    written = elem
     elem = _unwrap(doc, elem, notes)
     kind = model = elem.get("type", "")
+    if kind in NO_RENDERER:
+        return Entry(name=name, file=file, problem=f"{kind}: {NO_RENDERER[kind]}", notes=notes)
+    if kind in AS_WRITTEN:
+        return _as_written(doc, written, name, file, notes, AS_WRITTEN[kind],
+                           f"a Mitsuba {kind} BSDF: no model reads it exactly")
     if model not in MODELS:
-        why = f"{NOT_YET[kind]} ({kind}) is not supported yet" if kind in NOT_YET else \
-            f"Mitsuba BSDF type {kind!r} has no model here (models: {', '.join(sorted(MODELS))})"
-        return Entry(name=name, file=file, problem=why, notes=notes)
+        return _as_written(doc, written, name, file, notes, "", f"Mitsuba BSDF type {kind!r} has no model here")
     textures: dict[str, Texture] = {}
     try:
         params, textured = _blend_params(doc, elem, notes) if model == "blendbsdf" else \
             _params(doc, elem, model, notes, textures)
     except ConfigError as exc:
-        return Entry(name=name, file=file, problem=str(exc), notes=notes)
-    material = Material(adapter="mitsuba", model=model, params=params, name=name, textures=textures)
+        if model != "blendbsdf":
+            return Entry(name=name, file=file, problem=str(exc), notes=notes)
+        return _as_written(doc, written, name, file, notes, "", str(exc))
+    lossy = [n for n in notes if any(w in n for w in LOSSY)]
+    try:
+        native = _native(doc, written, name, textured + [n.split(":")[0] + " map" for n in lossy
+                                                         if n.startswith(("bumpmap", "normalmap"))]) if lossy else None
+    except ConfigError as exc:  # a file it names is missing: Mitsuba could not load it either
+        native = None
+        notes.append(f"not rendered as written: {exc}")
+    material = Material(adapter="mitsuba", model=model, params=params, name=name, textures=textures, native=native)
     return Entry(name=name, file=file, material=material, notes=notes, textured=textured)
+
+
+LOSSY = ("is ignored", ": ignored", "read as its mean", "read as the model's default", "is isotropic here")
+"""What a reading's notes say it left out of the material (a bump map, an image's texels, a texture as a
+constant, an anisotropy): such a material is rendered by Mitsuba from its element as written."""
+
+
+def _as_written(doc: _Document, elem: ET.Element, name: str, file: str, notes: list[str], reading: str,
+                why: str) -> Entry:
+    """A BSDF rendered as written, with the reading ``reading`` ("": none) of its properties where one is given."""
+    try:
+        native = _native(doc, elem, name, ())
+    except ConfigError as exc:
+        return Entry(name=name, file=file, problem=f"{why}, and Mitsuba cannot load it as written: {exc}", notes=notes)
+    params: dict = {}
+    model = ""
+    if reading:
+        inner = _unwrap(doc, elem, [])
+        as_read = ET.Element("bsdf", {**inner.attrib, "type": reading})
+        as_read.extend(list(inner))
+        try:
+            params, _ = _params(doc, as_read, reading, notes)
+            model = reading
+        except ConfigError as exc:
+            notes.append(f"not read as {reading}: {exc}")
+    notes.append(f"{why}: rendered by Mitsuba as written" + (f", read as {model} to start the fit" if model else ""))
+    material = Material(adapter="mitsuba", model=model, params=params, name=name, native=native)
+    return Entry(name=name, file=file, material=material, notes=notes)
+
+
+def _native(doc: _Document, elem: ET.Element, name: str, driven) -> Native:
+    """The element as Mitsuba loads it on its own: `<ref>`s replaced by what they name, every file it names made
+    absolute (found as Mitsuba finds it); its key the text and those files' contents."""
+    copy = _resolved(doc, elem, depth=0)
+    copy.set("version", "3.0.0")
+    copy.attrib.pop("id", None)
+    files = []
+    for e in copy.iter():
+        if e.get("filename"):
+            files.append(str(doc.find(e.get("filename"))))
+            e.set("filename", files[-1])
+        if e.tag == "string" and e.get("name") == "filename" and e.get("value"):
+            files.append(str(doc.find(e.get("value"))))
+            e.set("value", files[-1])
+    text = ET.tostring(copy, encoding="unicode")
+    digest = hashlib.sha256(text.encode())
+    for f in files:
+        digest.update(Path(f).read_bytes())
+    transmits = any(e.get("type") in TRANSMITTING for e in copy.iter("bsdf"))
+    driven = driven or [f"{t.get('name', 'texture')} <- {t.get('type', 'texture')}" + "".join(
+        f" {s.get('value')!r}" for s in t.iter("string") if s.get("name") == "filename") for t in copy.iter("texture")]
+    return Native(file=str(doc.path.resolve()), name=name, sha256=digest.hexdigest(), element=text,
+                  driven=tuple(driven), transmits=transmits)
+
+
+TRANSMITTING = {"dielectric", "roughdielectric", "thindielectric", "polarizer", "retarder", "null", "mask"}
+
+
+def _resolved(doc: _Document, elem: ET.Element, depth: int) -> ET.Element:
+    if depth > 16:
+        raise ConfigError("<ref>s nest deeper than 16 (a loop?)", file=str(doc.path))
+    target = doc.ref(elem) if elem.tag == "ref" else elem
+    out = ET.Element(target.tag, dict(target.attrib))
+    if elem.tag == "ref" and elem.get("name"):
+        out.set("name", elem.get("name"))
+    out.text = target.text
+    for child in target:
+        out.append(_resolved(doc, child, depth + 1))
+    return out
 
 
 def _unwrap(doc: _Document, elem: ET.Element, notes: list[str]) -> ET.Element:
