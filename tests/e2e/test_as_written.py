@@ -1,0 +1,121 @@
+"""A material rendered as its file holds it: a `.blend`'s Mix Shader, node group, Glass BSDF, Emission and
+image-textured Principled BSDF are sources Cycles renders from the file (`Material.native`), fitted and judged
+against that rendering; none is refused, none is flattened silently."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from brdfremap.core.cli import main
+from helpers import ROOT
+
+DATA = ROOT / "tests" / "data"
+FAST = ["--resolution", "32", "--spp", "64", "--quiet"]
+
+
+@pytest.fixture(scope="module")
+def everyday(tmp_path_factory):
+    """tests/data/blend/everyday.py's .blend and its wood image, made with bpy in a process of its own."""
+    folder = tmp_path_factory.mktemp("everyday")
+    made = subprocess.run([sys.executable, str(DATA / "blend" / "everyday.py"), str(folder)],
+                          capture_output=True, text=True)
+    assert made.returncode == 0, made.stderr[-2000:]
+    return folder
+
+
+def test_every_material_of_an_everyday_blend_is_read_and_the_unreadable_ones_render_as_written(everyday):
+    from brdfremap.adapters.cycles.library import BlendReader
+    from brdfremap.core.data.textures import mean_value, read_values, texture
+
+    entries = {e.name: e for e in BlendReader().read(everyday / "everyday.blend")}
+    assert not [e.problem for e in entries.values() if e.problem]
+    m = {name: e.material for name, e in entries.items()}
+    # A plain Principled BSDF is its reading, exactly: no render of the file needed.
+    assert m["gold"].native is None and m["coated paint"].native is None
+    # No reading: rendered as written, with an empty model.
+    for name in ("mix diffuse glossy", "grouped plastic", "emission"):
+        assert m[name].native is not None and m[name].model == "", name
+        assert m[name].native.name == name and len(m[name].native.sha256) == 64
+    # The Glass BSDF read as a Principled glass (the start), rendered as the Glass BSDF; light passes.
+    assert m["clear glass"].model == "principled" and m["clear glass"].params["transmission_weight"] == 1.0
+    assert m["clear glass"].native.transmits
+    # The wood: its reading takes the image's mean, not the socket's hidden 0.8 grey, and says it varies.
+    mean = mean_value(read_values(texture(everyday / "wood.png", "srgb"), "rgb"))
+    assert m["wood"].params["base_color"] == pytest.approx(mean, rel=1e-6)
+    assert m["wood"].native.driven == ("base_color <- image 'wood.png'",)
+
+
+def test_a_blend_job_key_follows_the_files_content_not_its_path(everyday, tmp_path):
+    from brdfremap.core.data.schemas import Material, Native
+    from brdfremap.core.job.job import Job, Target
+
+    def key(file, sha):
+        native = Native(file=str(file), name="mix", sha256=sha)
+        return Job(source=Material(adapter="cycles", model="", native=native),
+                   target=Target(adapter="cycles", model="principled")).key()
+
+    assert key(everyday / "a.blend", "0" * 64) == key(tmp_path / "b.blend", "0" * 64)
+    assert key(everyday / "a.blend", "0" * 64) != key(everyday / "a.blend", "1" * 64)
+
+
+def test_an_everyday_blend_converts_each_material_against_its_own_rendering(everyday, tmp_path, cycles_adapter):
+    out = tmp_path / "out"
+    assert main(["convert", str(everyday / "everyday.blend"), "--to", "cycles", "--out", str(out), *FAST]) == 0
+    doc = json.loads((out / "convert.json").read_text())
+    rows = {m["name"]: m for m in doc["materials"]}
+    assert {r["status"] for r in rows.values()} <= {"ok", "mismatch", "unreliable", "unchecked"}, rows
+    results = {name: json.loads((out / "materials" / r["slot"] / "result.json").read_text())
+               for name, r in rows.items()}
+    # Plain Principled BSDFs to their own model: nothing to fit.
+    assert results["gold"]["renders"] == 0 and results["coated paint"]["renders"] == 0
+    # The node group's Principled is found by the fit, from no reading at all.
+    grouped = results["grouped plastic"]
+    # (Its verdict is not asserted: at 32 px the rim light's two half-sample renders of one Principled BSDF part
+    # by 7-18 % with seeds, mesh or point alike, over a floor of half that: the tool's sampling, said in the note.)
+    assert rows["grouped plastic"]["model"] == "principled" and rows["grouped plastic"]["relative_rmse"] < 0.01
+    assert grouped["params"]["base_color"] == pytest.approx([0.05, 0.12, 0.6], abs=0.03)
+    assert grouped["params"]["roughness"] == pytest.approx(0.35, abs=0.05)
+    # The Mix of Diffuse and Glossy: the Principled BSDF follows it within a few percent, and the
+    # candidates tried are said.
+    assert rows["mix diffuse glossy"]["relative_rmse"] < 0.12
+    assert rows["mix diffuse glossy"]["model_why"].startswith("no reading: the Principled BSDF")
+    # The wood: a uniform brown near its image's mean, never "ok, 0.00 %" over a dropped texture.
+    wood = results["wood"]
+    mean = np.array(results["wood"]["start"]["params"]["base_color"])
+    assert np.linalg.norm(np.array(wood["params"]["base_color"]) - mean) / np.linalg.norm(mean) < 0.05
+    assert wood["metrics"]["relative_rmse"] > 0.05 and "uniform where the source is not" in wood["reason"]
+    assert any(f["kind"] == "uniform_target" for f in wood["findings"])
+    # Light the Principled BSDF does not make (it has no emission here): a mismatch, not a pass.
+    assert rows["emission"]["status"] in ("mismatch", "unreliable")
+
+
+def test_mitsuba_bsdfs_no_model_reads_render_as_written_and_what_none_renders_is_one_line_each():
+    from brdfremap.adapters.mitsuba.reader import MitsubaXmlReader
+
+    entries = {e.name: e for e in MitsubaXmlReader().read(DATA / "mitsuba" / "as_written.xml")}
+    pplastic, blend = entries["violet pplastic"].material, entries["gold over grey"].material
+    assert pplastic.model == "roughplastic" and pplastic.params["diffuse_reflectance"] == (0.35, 0.1, 0.5)
+    assert pplastic.native.element.startswith('<bsdf type="pplastic"') and 'version="3.0.0"' in pplastic.native.element
+    assert blend.model == "" and "Au" in blend.native.element  # a smooth conductor: no blend model takes it
+    assert entries["hair"].problem.startswith("hair: hair is drawn along fibres")
+    assert entries["polarizer"].problem.startswith("polarizer: a polarizer acts on the polarization")
+
+
+def test_mitsuba_bsdfs_as_written_convert_to_principled(tmp_path, mitsuba_adapter, cycles_adapter):
+    out = tmp_path / "out"
+    # Exit 1: two materials are unsupported (hair, a polarizer), each one line; the others convert.
+    assert main(["convert", str(DATA / "mitsuba" / "as_written.xml"), "--to", "cycles:principled", "--out", str(out),
+                 *FAST]) == 1
+    rows = {m["name"]: m for m in json.loads((out / "convert.json").read_text())["materials"]}
+    assert rows["hair"]["status"] == rows["polarizer"]["status"] == "unsupported"
+    for name in ("violet pplastic", "gold over grey"):
+        assert rows[name]["status"] in ("ok", "mismatch", "unreliable", "unchecked"), rows[name]
+        result = json.loads((out / "materials" / rows[name]["slot"] / "result.json").read_text())
+        assert result["source_renders"] > 0 and result["renders"] > 0  # rendered and fitted, not read through
+    # pplastic: a specular and a diffuse lobe without the interreflection a rough plastic has; the
+    # Principled BSDF follows it to about 14 % (its violet kept).
+    violet = json.loads((out / "materials" / rows["violet pplastic"]["slot"] / "result.json").read_text())
+    r, g, b = violet["params"]["base_color"]
+    assert b > r > g and rows["violet pplastic"]["relative_rmse"] < 0.25
