@@ -32,7 +32,7 @@ from brdfremap.core.data.atomic import write_text_atomic
 from brdfremap.core.data.environment import pixel_directions, radiance
 from brdfremap.core.data.errors import RenderError
 from brdfremap.core.data.scene import EnvironmentLight, PointLight, ProbeScene
-from brdfremap.core.data.schemas import Value
+from brdfremap.core.data.schemas import Native, Value
 from brdfremap.core.data.scratch import scratch_dir
 from brdfremap.core.data.textures import Texture
 from brdfremap.core.host.analytic import environment_irradiance
@@ -85,6 +85,7 @@ class MaterialXAdapter(Adapter):
                     "(`make test` and `make demo` do both)")
     models = MODELS
     light_types = frozenset({"point", "environment"})
+    natives = True
     version = "1"
     calibration = ("standard_surface", {"base": 1.0, "base_color": 0.8, "specular": 0.0})
     glasses = {kind: ("open_pbr_surface", {"base_color": 1.0, "transmission_weight": 1.0, "specular_ior": 1.5,
@@ -137,6 +138,14 @@ class MaterialXAdapter(Adapter):
             raise RenderError(f"materialx: model {model.name!r} has no lobes to render alone")
         assert isinstance(model, MaterialXModel)
         return self.render_document(model.program_document(), model.uniforms(model.complete(params)), scene)
+
+    def render_native(self, native: Native, scene: ProbeScene, lobe: str | None = None,
+                      transmissive: bool = False) -> np.ndarray:
+        """A material as its document writes it (`Native.element`: its node graphs and images), by the GLSL
+        MaterialX generates for it; no lobe of it apart."""
+        if lobe is not None:
+            raise RenderError(f"materialx: a document rendered as written has no {lobe} lobe of its own to render")
+        return self.render_document(native.element, {}, scene, shader=native.name)
 
     def render_document(self, document: str, values: dict[str, list[str]], scene: ProbeScene,
                         shader: str = "brdfremap_shader") -> np.ndarray:

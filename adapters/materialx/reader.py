@@ -8,11 +8,12 @@ drives is read at its default, and said."""
 
 from __future__ import annotations
 
+import hashlib
 import re
 from pathlib import Path
 
 from brdfremap.core.data.errors import ConfigError
-from brdfremap.core.data.schemas import Material
+from brdfremap.core.data.schemas import Material, Native
 from brdfremap.core.data.textures import colour_to_linear
 from brdfremap.core.library.formats import Entry, clip_into
 
@@ -49,7 +50,35 @@ class MaterialXReader:
         if not valid:
             first = why.strip().splitlines()[0]
             raise ConfigError(f"is not valid MaterialX: {first}", file=str(path), field=_line_of(path, first))
-        return [material_entry(m, mat, str(path), upgraded) for mat in doc.getMaterialNodes()]
+        return [_as_written(m, path, material_entry(m, mat, str(path), upgraded)) for mat in doc.getMaterialNodes()]
+
+
+def _as_written(m, path: Path, entry: Entry) -> Entry:
+    """A material an image or a node graph drives, rendered by MaterialX from the document as written
+    (`Material.native`: the document with this material alone, its file names made absolute), where
+    every file it names is there; else as read, and said."""
+    if entry.material is None or not entry.textured:
+        return entry
+    path = path.resolve()
+    raw = m.createDocument()
+    m.readFromXmlFile(raw, str(path))
+    m.flattenFilenames(raw, m.FileSearchPath(str(path.parent)))
+    for other in raw.getMaterialNodes():
+        if other.getName() != entry.name:
+            raw.removeNode(other.getName())
+    files = [Path(i.getValueString()) for e in raw.traverseTree() if e.isA(m.Input) and e.getType() == "filename"
+             for i in [e] if i.getValueString()]
+    missing = [str(f) for f in files if not f.is_file()]
+    if missing:
+        return entry.model_copy(update={"notes": [*entry.notes, f"not rendered as written: its images "
+                                                  f"{', '.join(missing)} are not found"]})
+    text = m.writeToXmlString(raw)
+    digest = hashlib.sha256(text.encode())
+    for f in files:
+        digest.update(f.read_bytes())
+    native = Native(file=str(path.resolve()), name=entry.name, sha256=digest.hexdigest(), element=text,
+                    driven=tuple(entry.textured))
+    return entry.model_copy(update={"material": entry.material.model_copy(update={"native": native})})
 
 
 def material_entry(m, mat, file: str, upgraded: dict[str, list[str]] | None = None, name: str = "") -> Entry:
@@ -73,8 +102,9 @@ def material_entry(m, mat, file: str, upgraded: dict[str, list[str]] | None = No
         params, textured = _inputs(shader, model, notes)
     except ConfigError as exc:  # one material's value (an unknown colour space): that material, not the file
         return Entry(name=name, file=file, problem=str(exc))
-    textures = _textures(shader, model, name, notes)
+    textures, laid = _textures(shader, model, name, notes)
     params.update(_means(textures, model, name, notes))
+    params.update(_means(laid, model, name, notes))
     notes += clip_into(model, params)
     return Entry(name=name, file=file, notes=notes, textured=textured,
                  material=Material(adapter="materialx", model=model.name, params=params, name=name, textures=textures))
@@ -134,22 +164,23 @@ def _image_node(inp) -> tuple[object | None, int | None, str]:
     return node, channel, ""
 
 
-def _textures(shader, model, name: str, notes: list[str]) -> dict:
+def _textures(shader, model, name: str, notes: list[str]) -> tuple[dict, dict]:
     """The inputs an image node drives directly (`image`, `tiledimage`, glTF's `gltf_image` and
     `gltf_colorimage`, or one channel of one through a `separate3`; default texture coordinates, no
-    tiling, transform or factor), as textures of the parameter of that name."""
+    tiling, transform or factor), as textures of the parameter of that name; and those whose image is
+    laid otherwise (tiled, transformed), whose mean is their reading all the same."""
     from brdfremap.core.data.textures import texture
 
     from .correspondence import QUIET
 
-    out = {}
+    out, laid = {}, {}
     for inp in shader.getInputs():
         if inp.getName() not in model.names or inp.getName() in QUIET:  # an occlusion map: not reflectance
             continue
         node, channel, why = _image_node(inp)
         if node is None:
             continue
-        why = why or _unusable(node)
+        laid_out = "" if why else _unusable(node)
         f = node.getInput("file")
         path = Path(f.getResolvedValueString()) if f is not None and not why else None
         if path is not None and not path.is_absolute():
@@ -162,11 +193,13 @@ def _textures(shader, model, name: str, notes: list[str]) -> dict:
         if why:
             notes.append(f"{inp.getName()}: {why}: read at its default")
             continue
+        if laid_out:
+            notes.append(f"{inp.getName()}: {laid_out}: read as its image's mean")
         filt = node.getInput("filtertype")
-        out[inp.getName()] = texture(path, "srgb" if space in SRGB_SPACES else "linear",
+        (laid if laid_out else out)[inp.getName()] = texture(path, "srgb" if space in SRGB_SPACES else "linear",
                                      "nearest" if filt is not None and filt.getValueString() == "closest" else "linear",
                                      channel=channel, where=f"{name}: {inp.getName()}")
-    return out
+    return out, laid
 
 
 def _means(textures: dict, model, name: str, notes: list[str]) -> dict:

@@ -9,6 +9,7 @@ import sys
 import numpy as np
 import pytest
 from brdfremap.core.cli import main
+from conftest import need_adapter
 from helpers import ROOT
 
 DATA = ROOT / "tests" / "data"
@@ -119,3 +120,37 @@ def test_mitsuba_bsdfs_as_written_convert_to_principled(tmp_path, mitsuba_adapte
     violet = json.loads((out / "materials" / rows["violet pplastic"]["slot"] / "result.json").read_text())
     r, g, b = violet["params"]["base_color"]
     assert b > r > g and rows["violet pplastic"]["relative_rmse"] < 0.25
+
+
+WOOD = DATA / "materialx" / "wood" / "Materials" / "Examples" / "StandardSurface" / "standard_surface_wood_tiled.mtlx"
+
+
+def test_a_materialx_document_with_tiled_images_reads_their_means_and_renders_as_written():
+    from brdfremap.adapters.materialx.reader import MaterialXReader
+    from brdfremap.core.data.textures import mean_value, read_values, texture
+
+    (entry,) = MaterialXReader().read(WOOD)
+    m = entry.material
+    colour = mean_value(read_values(texture(WOOD.parents[3] / "Images" / "wood_color.jpg", "srgb"), "rgb"))
+    assert m.params["base_color"] == pytest.approx(colour, rel=1e-6)  # the tiled image's mean, not 0.8 grey
+    assert 0.0 < m.params["specular_roughness"] < 1.0
+    assert m.native.driven == ("base_color <- tiledimage 'wood_color.jpg'",
+                               "specular_roughness <- tiledimage 'wood_roughness.jpg'")
+    # The document with this material alone, its images found wherever the test runs.
+    assert str(WOOD.parents[3] / "Images" / "wood_color.jpg") in m.native.element
+    assert "fileprefix" not in m.native.element
+
+
+def test_a_tiled_materialx_wood_converts_against_its_own_rendering(tmp_path, cycles_adapter):
+    from brdfremap.adapters.materialx.adapter import MaterialXAdapter
+
+    need_adapter(MaterialXAdapter)
+    out = tmp_path / "out"
+    assert main(["convert", str(WOOD), "--to", "cycles:principled", "--out", str(out), *FAST]) == 0
+    (row,) = json.loads((out / "convert.json").read_text())["materials"]
+    result = json.loads((out / "materials" / row["slot"] / "result.json").read_text())
+    assert result["source_renders"] > 0 and result["renders"] > 0
+    assert any(f["kind"] == "uniform_target" for f in result["findings"])
+    assert "uniform where the source is not" in result["reason"]
+    r, g, b = result["params"]["base_color"]
+    assert r > g > b  # a brown, not the document's default grey
