@@ -341,6 +341,8 @@ class CyclesAdapter(Adapter):
                 except OSError:
                     pass
             self._keep(key, passes)
+        else:
+            self._passes.move_to_end(key)
         return lobe_image(passes, lobe)
 
     def candidates(self) -> list[ModelChoice]:

@@ -42,8 +42,10 @@ def _material(bpy, mat, defaults) -> dict:
     if not links:
         entry["problem"] = "nothing is connected to the Material Output's Surface"
         return entry
-    entry["transmits"] = _transmits(tree) or output.inputs["Volume"].is_linked
-    entry["driven"] = _spatial(tree)
+    used = _upstream(output)
+    entry["transmits"] = _transmits(used) or output.inputs["Volume"].is_linked
+    entry["driven"] = _spatial(used)
+    entry["files"] = _files(bpy, used)
     node = links[0].from_node
     model = BY_TYPE.get(node.type)
     if node.type in AS_PRINCIPLED:
@@ -86,37 +88,53 @@ TRANSMITTING = {"BSDF_GLASS", "BSDF_REFRACTION", "BSDF_TRANSLUCENT", "BSDF_TRANS
 """Nodes through which light may pass (a Principled BSDF: by its transmission or subsurface weight)."""
 
 
-def _transmits(tree, seen=None) -> bool:
-    seen = set() if seen is None else seen
-    for node in tree.nodes:
+def _upstream(output) -> list:
+    """The nodes the output's Surface and Volume use (through links; inside a node group, every node the
+    group's own output uses), each once: what renders, not what the tree also holds."""
+    found, todo = {}, [link.from_node for name in ("Surface", "Volume") for link in output.inputs[name].links]
+    while todo:
+        node = todo.pop()
+        if node.as_pointer() in found:
+            continue
+        found[node.as_pointer()] = node
+        todo += [link.from_node for sock in node.inputs for link in sock.links]
+        group = getattr(node, "node_tree", None) if node.type == "GROUP" else None
+        if group is not None:
+            todo += [link.from_node for n in group.nodes if n.type == "GROUP_OUTPUT" for sock in n.inputs
+                     for link in sock.links]
+    return list(found.values())
+
+
+def _transmits(nodes) -> bool:
+    for node in nodes:
         if node.type in TRANSMITTING:
             return True
         if node.type == "BSDF_PRINCIPLED" and any(
                 input_socket(node, name).is_linked or input_socket(node, name).default_value > 0.0
                 for name in ("Transmission Weight", "Subsurface Weight")):
             return True
-        group = getattr(node, "node_tree", None)
-        if node.type == "GROUP" and group is not None and group.name not in seen:
-            seen.add(group.name)
-            if _transmits(group, seen):
-                return True
     return False
 
 
-def _spatial(tree, seen=None) -> list[str]:
-    """The texture and attribute nodes whose output is used: what makes the material vary over the
-    surface (a Fresnel or Layer Weight varies with the angle only, which a uniform material can follow)."""
-    seen = set() if seen is None else seen
+def _files(bpy, nodes) -> list[str]:
+    """The files the material reads besides its .blend: its images (not packed) and the libraries its node
+    groups are linked from (their content is part of its key)."""
     out = []
-    for node in tree.nodes:
-        if (node.type.startswith("TEX_") or node.type in ("ATTRIBUTE", "VERTEX_COLOR")) and \
-                any(o.is_linked for o in node.outputs):
-            out.append(_source(node))
-        group = getattr(node, "node_tree", None)
-        if node.type == "GROUP" and group is not None and group.name not in seen:
-            seen.add(group.name)
-            out += _spatial(group, seen)
-    return out
+    for node in nodes:
+        image = getattr(node, "image", None) if node.type == "TEX_IMAGE" else None
+        if image is not None and image.source == "FILE" and image.packed_file is None:
+            out.append(bpy.path.abspath(image.filepath, library=image.library))
+        group = getattr(node, "node_tree", None) if node.type == "GROUP" else None
+        if group is not None and group.library is not None:
+            out.append(bpy.path.abspath(group.library.filepath))
+    return sorted(set(out))
+
+
+def _spatial(nodes) -> list[str]:
+    """The texture and attribute nodes the material uses: what makes it vary over the surface (a Fresnel or
+    Layer Weight varies with the angle only, which a uniform material can follow)."""
+    return [_source(node) for node in nodes if node.type.startswith("TEX_") or node.type in ("ATTRIBUTE",
+                                                                                          "VERTEX_COLOR")]
 
 
 def _read(bpy, node, model: str, entry: dict, defaults) -> None:

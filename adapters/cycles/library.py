@@ -60,7 +60,13 @@ class BlendReader:
 def _entry(m: dict, file: str, digest: str) -> Entry:
     """A material the worker read: its reading (a model's parameters, an image's input as the image's
     mean), and the file itself where Cycles renders it as the file holds it (`Native`)."""
-    native = Native(file=str(Path(file).resolve()), name=m["name"], sha256=digest,
+    missing = [f for f in m.get("files", []) if not Path(f).is_file()]
+    if m.get("native") and missing:
+        why = f"its files {', '.join(missing)} are not found: Cycles cannot render it as the file holds it"
+        if m["model"] is None:
+            return Entry(name=m["name"], file=file, problem=why, notes=m["notes"])
+        m = {**m, "native": False, "notes": [*m["notes"], why + "; converted from its reading"]}
+    native = Native(file=str(Path(file).resolve()), name=m["name"], sha256=_digest(digest, m.get("files", [])),
                     driven=tuple([*m["textured"], *(d for d in m.get("driven", []) if not any(
                         t.endswith(d) for t in m["textured"]))]),
                     transmits=m.get("transmits", False)) if m.get("native") else None
@@ -87,6 +93,17 @@ def _entry(m: dict, file: str, digest: str) -> Entry:
     return Entry(name=m["name"], file=file, notes=notes, textured=m["textured"],
                  material=Material(adapter="cycles", model=m["model"], params=params, name=m["name"],
                                    textures=textures, native=native))
+
+
+def _digest(blend: str, files: list[str]) -> str:
+    """A material's content: its .blend's and every file it reads (an edited image is fitted again)."""
+    h = hashlib.sha256(blend.encode())
+    for f in files:
+        try:
+            h.update(hashlib.sha256(Path(f).read_bytes()).digest())
+        except OSError as exc:
+            raise ConfigError(f"cannot read {f}: {exc.strerror or exc}", file=f) from None
+    return h.hexdigest()
 
 
 class BlendLibraryWriter:

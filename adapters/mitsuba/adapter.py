@@ -303,6 +303,9 @@ class MitsubaAdapter(Adapter):
             raise RenderError(f"mitsuba: a BSDF rendered as written has no {lobe} lobe of its own to render")
         key = ("native", native.sha256, transmissive, scene.cache_key())
         if key not in self._scenes:
+            from .reader import check_element
+
+            check_element(native.element, native.file)  # a plugin is loaded by its type's file name
             try:
                 bsdf = mi.load_string(native.element)
                 doc = self.scene_dict("diffuse", model_of("diffuse").complete({}), scene)

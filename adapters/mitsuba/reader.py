@@ -163,8 +163,21 @@ def _substitute(text: str, defaults: dict[str, str], path: Path) -> str:
     return _SUBST.sub(one, text)
 
 
+class Notes(list):
+    """A reading's notes, and which of them say it left part of the material out (`drop`): such a material is
+    rendered by Mitsuba from its element as written."""
+
+    def __init__(self):
+        super().__init__()
+        self.dropped: list[str] = []
+
+    def drop(self, text: str) -> None:
+        self.append(text)
+        self.dropped.append(text)
+
+
 def _entry(doc: _Document, elem: ET.Element, name: str, file: str) -> Entry:
-    notes: list[str] = []
+    notes = Notes()
     written = elem
     elem = _unwrap(doc, elem, notes)
     kind = model = elem.get("type", "")
@@ -174,6 +187,9 @@ def _entry(doc: _Document, elem: ET.Element, name: str, file: str) -> Entry:
         return _as_written(doc, written, name, file, notes, AS_WRITTEN[kind],
                            f"a Mitsuba {kind} BSDF: no model reads it exactly")
     if model not in MODELS:
+        if kind not in MATERIAL_PLUGINS:
+            return Entry(name=name, file=file, problem=f"{kind!r} is not a BSDF Mitsuba ships (known: "
+                                                       f"{', '.join(sorted(MATERIAL_PLUGINS))})", notes=notes)
         return _as_written(doc, written, name, file, notes, "", f"Mitsuba BSDF type {kind!r} has no model here")
     textures: dict[str, Texture] = {}
     try:
@@ -183,10 +199,9 @@ def _entry(doc: _Document, elem: ET.Element, name: str, file: str) -> Entry:
         if model != "blendbsdf":
             return Entry(name=name, file=file, problem=str(exc), notes=notes)
         return _as_written(doc, written, name, file, notes, "", str(exc))
-    lossy = [n for n in notes if any(w in n for w in LOSSY)]
+    maps = [f"its {w.get('type', '')[:-3]} map" for w in written.iter("bsdf") if w.get("type") in SURFACE_MAPS]
     try:
-        native = _native(doc, written, name, textured + [n.split(":")[0] + " map" for n in lossy
-                                                         if n.startswith(("bumpmap", "normalmap"))]) if lossy else None
+        native = _native(doc, written, name, textured + maps) if notes.dropped else None
     except ConfigError as exc:  # a file it names is missing: Mitsuba could not load it either
         native = None
         notes.append(f"not rendered as written: {exc}")
@@ -194,12 +209,11 @@ def _entry(doc: _Document, elem: ET.Element, name: str, file: str) -> Entry:
     return Entry(name=name, file=file, material=material, notes=notes, textured=textured)
 
 
-LOSSY = ("is ignored", ": ignored", "read as its mean", "read as the model's default", "is isotropic here")
-"""What a reading's notes say it left out of the material (a bump map, an image's texels, a texture as a
-constant, an anisotropy): such a material is rendered by Mitsuba from its element as written."""
+SURFACE_MAPS = ("bumpmap", "normalmap")
+"""Wrappers that make a material vary over the surface (said as such where a uniform target is fitted to it)."""
 
 
-def _as_written(doc: _Document, elem: ET.Element, name: str, file: str, notes: list[str], reading: str,
+def _as_written(doc: _Document, elem: ET.Element, name: str, file: str, notes: Notes, reading: str,
                 why: str) -> Entry:
     """A BSDF rendered as written, with the reading ``reading`` ("": none) of its properties where one is given."""
     try:
@@ -209,7 +223,7 @@ def _as_written(doc: _Document, elem: ET.Element, name: str, file: str, notes: l
     params: dict = {}
     model = ""
     if reading:
-        inner = _unwrap(doc, elem, [])
+        inner = _unwrap(doc, elem, Notes())
         as_read = ET.Element("bsdf", {**inner.attrib, "type": reading})
         as_read.extend(list(inner))
         try:
@@ -217,37 +231,72 @@ def _as_written(doc: _Document, elem: ET.Element, name: str, file: str, notes: l
             model = reading
         except ConfigError as exc:
             notes.append(f"not read as {reading}: {exc}")
+    if not model and native.transmits:
+        params = {"transmission": 1.0}  # `AS_WRITTEN`'s: light passes
     notes.append(f"{why}: rendered by Mitsuba as written" + (f", read as {model} to start the fit" if model else ""))
     material = Material(adapter="mitsuba", model=model, params=params, name=name, native=native)
     return Entry(name=name, file=file, material=material, notes=notes)
 
 
 def _native(doc: _Document, elem: ET.Element, name: str, driven) -> Native:
-    """The element as Mitsuba loads it on its own: `<ref>`s replaced by what they name, every file it names made
-    absolute (found as Mitsuba finds it); its key the text and those files' contents."""
+    """The element as Mitsuba loads it on its own: `<ref>`s replaced by what they name (their ids dropped: one
+    `<ref>` used twice is two copies), every file it names made absolute (found as Mitsuba finds it), each
+    plugin one Mitsuba ships for a material (`check_element`); its key the text with each file's content in
+    place of its path (a moved scene keeps its results, an edited image is fitted again)."""
     copy = _resolved(doc, elem, depth=0)
     copy.set("version", "3.0.0")
-    copy.attrib.pop("id", None)
-    files = []
-    for e in copy.iter():
-        if e.get("filename"):
-            files.append(str(doc.find(e.get("filename"))))
-            e.set("filename", files[-1])
-        if e.tag == "string" and e.get("name") == "filename" and e.get("value"):
-            files.append(str(doc.find(e.get("value"))))
-            e.set("value", files[-1])
-    text = ET.tostring(copy, encoding="unicode")
-    digest = hashlib.sha256(text.encode())
-    for f in files:
-        digest.update(Path(f).read_bytes())
-    transmits = any(e.get("type") in TRANSMITTING for e in copy.iter("bsdf"))
     driven = driven or [f"{t.get('name', 'texture')} <- {t.get('type', 'texture')}" + "".join(
         f" {s.get('value')!r}" for s in t.iter("string") if s.get("name") == "filename") for t in copy.iter("texture")]
+    keyed = []
+    for e in copy.iter():
+        e.attrib.pop("id", None)
+        attr = "filename" if e.get("filename") else \
+            "value" if e.tag == "string" and e.get("name") == "filename" and e.get("value") else None
+        if attr is None:
+            continue
+        found = doc.find(e.get(attr))
+        try:
+            content = hashlib.sha256(found.read_bytes()).hexdigest()
+        except OSError as exc:
+            raise ConfigError(f"cannot read {found}: {exc.strerror or exc}", file=str(doc.path)) from None
+        e.set(attr, str(found))
+        keyed.append((str(found), content))
+    text = ET.tostring(copy, encoding="unicode")
+    check_element(text, str(doc.path))
+    text_key = text
+    for path, content in keyed:
+        text_key = text_key.replace(path, content)
+    digest = hashlib.sha256(text_key.encode())
+    transmits = any(e.get("type") in TRANSMITTING for e in copy.iter("bsdf"))
     return Native(file=str(doc.path.resolve()), name=name, sha256=digest.hexdigest(), element=text,
                   driven=tuple(driven), transmits=transmits)
 
 
 TRANSMITTING = {"dielectric", "roughdielectric", "thindielectric", "polarizer", "retarder", "null", "mask"}
+MATERIAL_PLUGINS = frozenset({
+    "diffuse", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "plastic",
+    "roughplastic", "pplastic", "measured", "principled", "principledthin", "blendbsdf", "mask", "twosided",
+    "bumpmap", "normalmap", "null", "hair", "polarizer", "retarder", "circular", "measured_polarized",
+    "ward", "phong", "ashikhmin_shirley", "ashikhmin_shirley_plastic",  # the tool's own Python BSDFs
+    "bitmap", "checkerboard", "mesh_attribute", "volume",  # textures
+    "regular", "irregular", "uniform", "srgb", "d65", "blackbody", "rawconstant"})  # spectra
+"""The plugin types a material element rendered as written may name: those Mitsuba ships for a BSDF, its
+textures and spectra. Mitsuba loads a plugin by its type's file name, unchecked: a type such as
+``../../evil`` would load (and run) a library of that name, so any other type is refused."""
+
+
+def check_element(text: str, file: str) -> None:
+    """A ConfigError naming the first plugin type of a material element that is not one of
+    `MATERIAL_PLUGINS` (the Mitsuba adapter checks again before it loads one)."""
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as exc:
+        raise ConfigError(f"a material element rendered as written is not XML: {exc}", file=file) from None
+    for e in root.iter():
+        kind = e.get("type")
+        if kind is not None and kind not in MATERIAL_PLUGINS:
+            raise ConfigError(f"<{e.tag} type={kind!r}> is not a plugin Mitsuba ships for a material (known: "
+                              f"{', '.join(sorted(MATERIAL_PLUGINS))}): not loaded", file=file)
 
 
 def _resolved(doc: _Document, elem: ET.Element, depth: int) -> ET.Element:
@@ -263,14 +312,14 @@ def _resolved(doc: _Document, elem: ET.Element, depth: int) -> ET.Element:
     return out
 
 
-def _unwrap(doc: _Document, elem: ET.Element, notes: list[str]) -> ET.Element:
+def _unwrap(doc: _Document, elem: ET.Element, notes: Notes) -> ET.Element:
     for _ in range(8):
         if elem.tag == "ref":
             elem = doc.ref(elem)
         kind = elem.get("type", "")
         if kind not in WRAPPERS:
             return elem
-        notes.append(f"{kind}: {WRAPPERS[kind]}")
+        (notes.append if kind == "twosided" else notes.drop)(f"{kind}: {WRAPPERS[kind]}")
         inner = [c for c in elem if c.tag in ("bsdf", "ref")]
         if not inner:
             return elem
@@ -278,7 +327,7 @@ def _unwrap(doc: _Document, elem: ET.Element, notes: list[str]) -> ET.Element:
     return elem
 
 
-def _params(doc: _Document, elem: ET.Element, model: str, notes: list[str],
+def _params(doc: _Document, elem: ET.Element, model: str, notes: Notes,
             textures: dict | None = None) -> tuple[dict, list[str]]:
     """The model's parameters from the BSDF's properties (Mitsuba's defaults for the rest); a
     `bitmap` on an input the model takes as an image into ``textures`` (when given)."""
@@ -306,14 +355,14 @@ def _params(doc: _Document, elem: ET.Element, model: str, notes: list[str],
         elif name in spec.names or name in CONVERTED.get(model, ()):
             params[name] = value
         elif name not in IGNORED:
-            notes.append(f"{name} = {prop.get('value')} has no counterpart in the {model!r} model: ignored")
+            notes.drop(f"{name} = {prop.get('value')} has no counterpart in the {model!r} model: ignored")
     if aniso and "anisotropy" in spec.names:
         params.update(anisotropy="anisotropic", alpha_u=float(aniso.get("alpha_u", 0.1)),
                       alpha_v=float(aniso.get("alpha_v", 0.1)))
     elif aniso:
         au, av = float(aniso.get("alpha_u", 0.1)), float(aniso.get("alpha_v", 0.1))
         params["alpha"] = math.sqrt(au * av)
-        notes.append(f"anisotropic (alpha_u {au:g}, alpha_v {av:g}): {model} is isotropic here, read as alpha "
+        notes.drop(f"anisotropic (alpha_u {au:g}, alpha_v {av:g}): {model} is isotropic here, read as alpha "
                      f"{params['alpha']:.4g}")
     params = spec.from_file(params, notes)
     ext = params.pop("ext_ior", None)
@@ -323,7 +372,7 @@ def _params(doc: _Document, elem: ET.Element, model: str, notes: list[str],
     return params, textured
 
 
-def _blend_params(doc: _Document, elem: ET.Element, notes: list[str]) -> tuple[dict, list[str]]:
+def _blend_params(doc: _Document, elem: ET.Element, notes: Notes) -> tuple[dict, list[str]]:
     """A blendbsdf's weight and its two BSDFs, each under its slot's name (`bsdf_1.alpha`)."""
     inner = [_unwrap(doc, c, notes) for c in elem if c.tag in ("bsdf", "ref") and c.get("name") != "weight"]
     if len(inner) != 2:
@@ -347,7 +396,7 @@ def _blend_params(doc: _Document, elem: ET.Element, notes: list[str]) -> tuple[d
     return params, textured
 
 
-def _value(doc: _Document, prop: ET.Element, name: str, notes: list[str]):
+def _value(doc: _Document, prop: ET.Element, name: str, notes: Notes):
     v = prop.get("value", "")
     if prop.tag == "spectrum":
         got = read_spectrum(prop, name, doc.find)
@@ -385,7 +434,7 @@ LINEAR_FILES = (".exr", ".hdr", ".pfm")
 """Image files Mitsuba reads as linear values; it decodes the others (PNG, JPEG...) as sRGB unless `raw`."""
 
 
-def _textured_input(doc: _Document, prop: ET.Element, name: str, spec, notes: list[str],
+def _textured_input(doc: _Document, prop: ET.Element, name: str, spec, notes: Notes,
                     maps: bool) -> tuple[Value | None, Texture | None]:
     """A textured input's constant (a bitmap's mean, a checkerboard's; None: the model's default) and,
     when ``maps`` and the model takes it as an image laid as it is, its bitmap as a texture."""
@@ -393,13 +442,13 @@ def _textured_input(doc: _Document, prop: ET.Element, name: str, spec, notes: li
     kind = spec.param(name).kind
     if tex.get("type") == "checkerboard":
         if any(c.tag in ("texture", "ref") for c in tex):
-            notes.append(f"{name}: a checkerboard of textures is read as the model's default")
+            notes.drop(f"{name}: a checkerboard of textures is read as the model's default")
             return None, None
         colours = {c.get("name"): _value(doc, c, f"{name}.{c.get('name')}", notes) for c in tex
                    if c.get("name") in ("color0", "color1")}
         c0, c1 = (_rgb(colours.get(k, d)) for k, d in (("color0", 0.4), ("color1", 0.2)))
         mean = tuple((a + b) / 2 for a, b in zip(c0, c1))
-        notes.append(f"{name}: a checkerboard texture is read as its mean, {_shown(mean)}")
+        notes.drop(f"{name}: a checkerboard texture is read as its mean, {_shown(mean)}")
         return (mean if kind == ParamKind.RGB else float(np.dot(mean, LUMA))), None
     image = _bitmap(doc, tex, name, notes)
     if image is None:
@@ -407,7 +456,7 @@ def _textured_input(doc: _Document, prop: ET.Element, name: str, spec, notes: li
     try:
         values = read_values(image, kind, where=f"{name} of a BSDF in {doc.path}")
     except ConfigError as exc:
-        notes.append(f"{name}: its image cannot be read ({exc}): read as the model's default")
+        notes.drop(f"{name}: its image cannot be read ({exc}): read as the model's default")
         return None, None
     mean = tuple(float(x) for x in values.reshape(-1, 3).mean(axis=0)) if kind == ParamKind.RGB else float(values.mean())
     plain = not any(t.get("name") == "to_uv" for t in tex if t.tag == "transform") and \
@@ -416,7 +465,7 @@ def _textured_input(doc: _Document, prop: ET.Element, name: str, spec, notes: li
         return mean, image
     why = "only an image laid as it is over the UV map is remapped texel by texel" if not plain else \
         f"the {spec.name} model does not take {name} as an image" if name not in spec.texturable else ""
-    notes.append(f"{name}: its image is read as its mean, {_shown(mean)}" + (f" ({why})" if why else ""))
+    notes.drop(f"{name}: its image is read as its mean, {_shown(mean)}" + (f" ({why})" if why else ""))
     return mean, None
 
 
@@ -433,18 +482,18 @@ def _shown(v) -> str:
     return "(" + ", ".join(f"{x:.4g}" for x in v) + ")" if isinstance(v, tuple) else f"{v:.4g}"
 
 
-def _bitmap(doc: _Document, tex: ET.Element, name: str, notes: list[str]) -> Texture | None:
+def _bitmap(doc: _Document, tex: ET.Element, name: str, notes: Notes) -> Texture | None:
     """A `bitmap` texture's file (found as Mitsuba finds it), how its values are read and filtered;
     None (and a note) for another texture or a file not found."""
     strings = {s.get("name"): s.get("value", "") for s in tex.iter("string")}
     if tex.get("type") != "bitmap" or not strings.get("filename"):
-        notes.append(f"{name}: a {tex.get('type', 'texture')} texture is read as the model's default (only a bitmap's "
+        notes.drop(f"{name}: a {tex.get('type', 'texture')} texture is read as the model's default (only a bitmap's "
                      "image or a checkerboard is read)")
         return None
     try:
         path = doc.find(strings["filename"])
     except ConfigError:
-        notes.append(f"{name}: its image {strings['filename']!r} is not found (beside the scene or in its <path>s): "
+        notes.drop(f"{name}: its image {strings['filename']!r} is not found (beside the scene or in its <path>s): "
                      "read as the model's default")
         return None
     raw = any(b.get("name") == "raw" and b.get("value", "").strip().lower() in ("true", "1") for b in tex.iter("boolean"))

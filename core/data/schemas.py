@@ -370,6 +370,9 @@ def load_material(path: str | Path) -> Material:
     from .textures import texture
 
     m = load_yaml_model(path, Material, "a material")
+    if m.native is not None:  # a digest a file could claim, and a file it could name: the readers' alone
+        raise ConfigError("is set by the readers of .blend, Mitsuba and MaterialX files, not written in a material "
+                          "file: give the file itself to `remap convert`", file=str(path), field="native")
     if not m.textures:
         return m
     here = Path(path).resolve().parent

@@ -157,12 +157,12 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
         fit = choose_scene(lambda sc: source(resolved.source_params, scene=sc), job.scene, env_ok,
                            job.settings.resolve_limit, fit_policy(job),
                            smooth=resolved.source_spec.is_smooth(resolved.source_params) or resolved.target_spec.smooth,
-                           transmissive=resolved.source_spec.transmissive(resolved.source_params),
+                           transmissive=resolved.source_transmits,
                            source_smooth=resolved.source_spec.is_smooth(resolved.source_params),
                            highlight=lambda sc: source_highlight(source, resolved, sc))
     renders = ProbeRenders(source, resolved.source_params, resolved.source_spec, target, fit.scene, given=job.scene,
                            given_noise=fit.scene_noise, resolve_limit=job.settings.resolve_limit, sharp=fit.sharp,
-                           look=resolved.look)
+                           look=resolved.look, transmits=resolved.source_transmits)
     informed = job.settings.start == Start.INFORMED and job.lookup is None and job.start is None
     smooth = smooth_held(resolved) if job.lookup is None else {}
     start = {**(informed_start(resolved) if informed else given_start(resolved)), **smooth}
@@ -304,8 +304,9 @@ def smooth_held(resolved: Resolved) -> dict[str, float]:
     """For a perfectly smooth source, the values that make the target perfectly smooth
     (`ModelSpec.smooth_when`: roughness 0) that the user did not fix: held there, not fitted. Under
     the studio a fit hardly tells roughness 0 from a little more, which a point light shows."""
-    if not resolved.source_spec.is_smooth(resolved.source_params):
-        return {}
+    native = resolved.job.source.native
+    if not resolved.source_spec.is_smooth(resolved.source_params) or (native is not None and native.driven):
+        return {}  # (a reading whose roughness a texture drives took the socket's value: not a mirror's word)
     return {k: v for k, v in resolved.target_spec.smooth_when.items() if k not in resolved.fixed}
 
 

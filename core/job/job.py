@@ -78,8 +78,10 @@ class Job(Strict):
         not of labels, names or notes."""
         doc = {
             "engine": ENGINE_VERSION,
+            # A material rendered as written by its content (`Native.sha256`), not its file's path or its text's
+            # (a Mitsuba element names its files by absolute paths).
             "source": self.source.model_dump(mode="json", exclude={"name": True, "textures": True,
-                                                                   "native": {"file"}}),
+                                                                   "native": {"file", "element"}}),
             "target": self.target.model_dump(mode="json"),
             "scene": json.loads(self.scene.cache_key()),
             "settings": self.settings.model_dump(mode="json"),
@@ -151,6 +153,13 @@ class Resolved:
         """The source's fixed rule for the target model, where its format defines one (`Model.rule_for`):
         the fit's start, and the rule's error beside the fit's."""
         return self.source_spec.rule_for(self.target_spec, self.source_params)
+
+    @property
+    def source_transmits(self) -> bool:
+        """Whether light passes through the source: its reading says so, or its file as written does
+        (`Native.transmits`): one answer for its renders, its fit scene and its verdict."""
+        native = self.job.source.native
+        return self.source_spec.transmissive(self.source_params) or (native is not None and native.transmits)
 
     @property
     def same_material(self) -> bool:

@@ -155,8 +155,11 @@ class ProbeRenders:
     def __init__(self, source: CachedRenderer, source_params: dict[str, Value], source_spec: Model,
                  target: CachedRenderer, scene: ProbeScene, given: ProbeScene | None = None,
                  given_noise: float = 0.0, resolve_limit: float | None = None, sharp: bool = False,
-                 look: Appearance | None | type[Ellipsis] = ...):
+                 look: Appearance | None | type[Ellipsis] = ..., transmits: bool | None = None):
         self.source, self.source_params, self.source_spec = source, dict(source_params), source_spec
+        self.transmits = transmits if transmits is not None else \
+            source_spec is not None and source_spec.transmissive(self.source_params)
+        """Whether light passes through the source (`Resolved.source_transmits`)."""
         if look is ...:  # not given: read here (a job passes `Resolved.look`, read once)
             look = None if source_spec is None else source_spec.appearance(self.source_params)
         self.look = look
@@ -243,7 +246,7 @@ class ProbeRenders:
         scene's when the fit ran elsewhere, the job's lights are not point lights, or the source
         lets light through."""
         if self.other_lights or self.job_scene.views or self.job_scene.environment is not None \
-                or self.source_spec.transmissive(self.source_params):
+                or self.transmits:
             return self.job_scene.resolution
         level = self.level(self.scene)
         spec = level.source_lobes.get("specular")  # a plastic's highlight, not its diffuse shading
@@ -252,8 +255,7 @@ class ProbeRenders:
         return point_resolution(self.job_scene, px)
 
     def agreement(self, params: dict[str, Value], validation: Validation, threshold: float, judged) -> Agreement:
-        transmissive = self.source_spec.transmissive(self.source_params) or \
-            self.target.model.transmissive(params)
+        transmissive = self.transmits or self.target.model.transmissive(params)
         first = self.scene.view_scenes()[0]  # adapters render one view at a time
         fit = (first.with_(seed=first.seed + 2), first.with_(seed=first.seed + 3))
         conditions = [(Lighting.SCENE, "fit scene", fit)] + [

@@ -23,6 +23,15 @@ def _order(item: "Item") -> tuple:
     return (RANK[item.status], -(rep.metrics.relative_rmse if rep else 0.0), item.entry.name.lower())
 
 
+def _source(src) -> str:
+    """The source as the card names it: its adapter and reading, and whether it is rendered as written."""
+    if src is None:
+        return ""
+    if src.native is None:
+        return f"{src.adapter}:{src.model}"
+    return f"{src.adapter}, as written" + (f" (read as {src.model})" if src.model else " (no reading)")
+
+
 def _card(item: "Item") -> dict:
     rep = item.done.report if item.done is not None else None
     src = item.entry.material
@@ -30,7 +39,7 @@ def _card(item: "Item") -> dict:
     card = {"name": item.entry.name, "file": item.entry.file, "status": item.status, "reason": item.reason,
             "model": item.model, "why": item.why, "notes": item.entry.notes, "textured": item.entry.textured,
             "texel": remapped,
-            "source": f"{src.adapter}:{src.model}" if src else "", "report": None}
+            "source": _source(src), "report": None}
     if rep is not None:
         folder = f"materials/{item.slot}"
         m = rep.metrics

@@ -154,3 +154,62 @@ def test_a_tiled_materialx_wood_converts_against_its_own_rendering(tmp_path, cyc
     assert "uniform where the source is not" in result["reason"]
     r, g, b = result["params"]["base_color"]
     assert r > g > b  # a brown, not the document's default grey
+
+
+def test_a_mitsuba_element_naming_an_unknown_plugin_is_refused_before_mitsuba_loads_it(tmp_path):
+    """Mitsuba loads a plugin by its type's file name, unchecked: a scene must not make it load a library."""
+    from brdfremap.adapters.mitsuba.reader import MitsubaXmlReader
+
+    scene = tmp_path / "evil.xml"
+    scene.write_text('<scene version="3.0.0"><bsdf type="../../../../tmp/evil" id="evil"/>'
+                     '<bsdf type="blendbsdf" id="mixed"><bsdf type="diffuse"/><bsdf type="x/../../y"/></bsdf></scene>')
+    entries = {e.name: e for e in MitsubaXmlReader().read(scene)}
+    assert entries["evil"].material is None and "is not a BSDF Mitsuba ships" in entries["evil"].problem
+    assert entries["mixed"].material is None and "is not a plugin Mitsuba ships" in entries["mixed"].problem
+
+
+def test_a_material_file_cannot_claim_a_native_file(tmp_path):
+    from brdfremap.core.data.errors import ConfigError
+    from brdfremap.core.data.schemas import load_material
+
+    f = tmp_path / "m.yaml"
+    f.write_text("adapter: cycles\nmodel: ''\nnative: {file: /tmp/x.blend, name: m, sha256: '0'}\n")
+    with pytest.raises(ConfigError, match="native"):
+        load_material(f)
+
+
+def test_a_mitsuba_key_follows_its_files_content_not_their_paths(tmp_path):
+    import shutil
+
+    from brdfremap.adapters.mitsuba.reader import MitsubaXmlReader
+
+    def key(folder):
+        (entry,) = [e for e in MitsubaXmlReader().read(folder / "scene.xml") if e.name == "blended"]
+        return entry.material.native.sha256
+
+    a = tmp_path / "a"
+    a.mkdir()
+    shutil.copy(DATA / "textured" / "reflectance.png", a / "weight.png")
+    (a / "scene.xml").write_text(
+        '<scene version="3.0.0"><bsdf type="blendbsdf" id="blended"><texture name="weight" type="bitmap">'
+        '<string name="filename" value="weight.png"/></texture><bsdf type="diffuse"/>'
+        '<bsdf type="conductor"/></bsdf></scene>')
+    b = tmp_path / "moved"
+    shutil.copytree(a, b)
+    assert key(a) == key(b)  # a moved scene keeps its results
+    shutil.copy(DATA / "textured" / "roughness.png", b / "weight.png")
+    assert key(a) != key(b)  # an edited image is fitted again
+
+
+def test_a_blend_materials_key_holds_its_images_content(everyday, tmp_path):
+    import shutil
+
+    from brdfremap.adapters.cycles.library import BlendReader
+
+    copy = tmp_path / "copy"
+    shutil.copytree(everyday, copy)
+    before = {e.name: e.material.native for e in BlendReader().read(copy / "everyday.blend") if e.material.native}
+    shutil.copy(DATA / "textured" / "reflectance.png", copy / "wood.png")  # the .blend itself unchanged
+    after = {e.name: e.material.native for e in BlendReader().read(copy / "everyday.blend") if e.material.native}
+    assert after["wood"].sha256 != before["wood"].sha256
+    assert after["mix diffuse glossy"].sha256 == before["mix diffuse glossy"].sha256
