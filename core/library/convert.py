@@ -427,6 +427,7 @@ def summary(result: Conversion) -> ConvertSummary:
     for i in result.items:
         rep = i.done.report if i.done is not None else None
         rows.append(MaterialRow(name=i.entry.name, file=i.entry.file, status=i.status, reason=i.reason,
+                                verdict=rep.as_verdict().told if rep else "",
                                 slot=i.slot if rep is not None else None, model=i.model or None, model_why=i.why,
                                 relative_rmse=rep.metrics.relative_rmse if rep else None,
                                 perceptual=rep.metrics.perceptual if rep else None,

@@ -45,6 +45,9 @@ class MaterialRow(Strict):
     file: str
     status: ItemStatus
     reason: str = Field(description="Why it failed or is unsupported ('' otherwise).")
+    verdict: str = Field("", description="What its verdict tells beside its status: why it is unreliable, a "
+                                         "mismatch or unchecked, and that the target is uniform where the source "
+                                         "is textured ('' for a plain ok).")
     slot: str | None = Field(description="Its folder under materials/ (None: no result).")
     model: str | None = Field(description="The target model.")
     model_why: str = Field(description="Why that model, where the adapter chose it.")

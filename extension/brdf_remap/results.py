@@ -21,6 +21,8 @@ class Row:
     reason: str
     folder: Path | None
     """None for a material that was not converted (failed, unsupported)."""
+    verdict: str = ""
+    """What its verdict tells beside its status (a uniform target for a textured source, why unreliable)."""
 
     @property
     def converted(self) -> bool:
@@ -31,14 +33,14 @@ class Row:
 
     def line(self) -> str:
         err = f"{self.error:.2%}" if self.error is not None else "–"
-        return f"{self.status}, {err}" + (f" ({self.model})" if self.model else "") + (
-            f": {self.reason}" if self.reason and not self.converted else "")
+        told = self.verdict if self.converted else self.reason
+        return f"{self.status}, {err}" + (f" ({self.model})" if self.model else "") + (f": {told}" if told else "")
 
 
 def rows(summary: dict, out: Path) -> list[Row]:
     """The summary's materials, worst first as the report orders them: failed, unsupported, then by error."""
     found = [Row(m["name"], m["status"], m.get("relative_rmse"), m.get("model") or "", m.get("reason") or "",
-                 Path(out) / "materials" / m["slot"] if m.get("slot") else None)
+                 Path(out) / "materials" / m["slot"] if m.get("slot") else None, m.get("verdict") or "")
              for m in summary.get("materials", [])]
     return sorted(found, key=lambda r: (r.converted, -(r.error or 0.0)))
 
