@@ -115,6 +115,12 @@ def texture_request(folder: Path, textures: dict[str, Texture] | None) -> dict[s
             for k, t in (textures or {}).items()}
 
 
+CANDIDATES = (ModelChoice("principled", {}, "no reading: the Principled BSDF, Cycles' most general model"),
+              ModelChoice("metallic", {}, "no reading: the Metallic BSDF, a conductor's Fresnel"),
+              ModelChoice("diffuse", {}, "no reading: the Diffuse BSDF"))
+"""The models a material with no reading is fitted to (`Adapter.candidates`), the most general first."""
+
+
 class CyclesAdapter(Adapter):
     name = "cycles"
     summary = "Blender Cycles (bpy, CPU) in a persistent worker process"
@@ -193,7 +199,8 @@ class CyclesAdapter(Adapter):
 
     def _render_passes(self, worker: JsonLinesWorker, req: dict[str, Any], n: int,
                        lobes: bool) -> dict[str, np.ndarray]:
-        """One render; its lobe passes only when ``lobes`` (they cost about 13 % of a render)."""
+        """One render (the worker's `render`, or the ``op`` ``req`` names); its lobe passes only when
+        ``lobes`` (they cost about 13 % of a render)."""
         out = os.path.join(self.scratch, f"r{n}.exr")
         try:
             worker.request({"op": "render", "out": out, "passes": lobes, **req})
@@ -324,46 +331,28 @@ class CyclesAdapter(Adapter):
                       transmissive: bool = False) -> np.ndarray:
         """A material of a user's .blend as the file holds it, on the probe mesh; a lobe from the same
         render passes as a model's (any node tree's diffuse and glossy closures fill them)."""
-        key = json.dumps({"native": [native.sha256, native.name], "scene": scene.document(),
-                          "transmissive": transmissive}, sort_keys=True)
+        req = {"op": "render_native", "path": str(Path(native.file).resolve()), "name": native.name,
+               "sha256": native.sha256, "scene": scene.document(), "depth": depth(transmissive)}
+        key = json.dumps(req, sort_keys=True)
         passes = self._cached(key, lobe)
         if passes is None:
             self.renders += 1
-            req = {"op": "render_native", "path": str(Path(native.file).resolve()), "name": native.name,
-                   "sha256": native.sha256, "scene": scene.document(), "depth": depth(transmissive)}
-            out = os.path.join(self.scratch, f"r{self.renders}.exr")
-            try:
-                self.worker.request({**req, "out": out, "passes": lobe is not None})
-                passes = read_passes(out, PASSES if lobe is not None else PASSES[:1])
-            finally:
-                try:
-                    os.unlink(out)
-                except OSError:
-                    pass
+            passes = self._render_passes(self.worker, req, self.renders, lobes=lobe is not None)
             self._keep(key, passes)
         else:
             self._passes.move_to_end(key)
         return lobe_image(passes, lobe)
 
     def candidates(self) -> list[ModelChoice]:
-        return [ModelChoice("principled", {}, "no reading: the Principled BSDF, Cycles' most general model"),
-                ModelChoice("metallic", {}, "no reading: the Metallic BSDF, a conductor's Fresnel"),
-                ModelChoice("diffuse", {}, "no reading: the Diffuse BSDF")]
+        return list(CANDIDATES)
 
     def render_saved(self, path: Path, name: str, scene: ProbeScene, transmissive: bool = False) -> np.ndarray:
         """A material of a .blend file (a library or material.blend this tool wrote), rendered on the
         probe mesh as Blender opens it: its textures read from the files it references."""
         self.renders += 1
-        out = os.path.join(self.scratch, f"r{self.renders}.exr")
-        try:
-            self.worker.request({"op": "render_saved", "path": str(Path(path).resolve()), "name": name,
-                                 "scene": scene.document(), "out": out, "passes": False, "depth": depth(transmissive)})
-            return read_passes(out, PASSES[:1])["Combined"]
-        finally:
-            try:
-                os.unlink(out)
-            except OSError:
-                pass
+        req = {"op": "render_saved", "path": str(Path(path).resolve()), "name": name, "scene": scene.document(),
+               "depth": depth(transmissive)}
+        return self._render_passes(self.worker, req, self.renders, lobes=False)["Combined"]
 
     def write_native(self, model: Model | str, params: dict[str, Value], out_dir: Path,
                      textures: dict[str, Texture] | None = None) -> list[Path]:
