@@ -238,7 +238,8 @@ class ProbeRenders:
         return validate(lambda sc: self.source(self.source_params, scene=sc), lambda sc: self.target(params, scene=sc),
                         self.job_scene, problems, given=self.other_lights,
                         given_noise=self.given_noise, fit_lights=self.scene.view_scenes()[0].lights,
-                        resolution=self.point_resolution(), resolve_limit=self.resolve_limit, sharp=self.sharp)
+                        resolution=self.point_resolution(), resolve_limit=self.resolve_limit, sharp=self.sharp,
+                        transmissive=self.transmits)
 
     def point_resolution(self) -> int:
         """The frontal point-light conditions' resolution, from the source's highlight (its specular

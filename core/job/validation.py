@@ -18,7 +18,7 @@ import numpy as np
 from pydantic import ValidationError
 
 from ..data.metrics import beyond_noise, delta_e_itp, relative_rmse
-from ..data.environment import DISC_RADIUS, DISCS
+from ..data.environment import BACKDROPS, DISC_RADIUS, DISCS, SOFT_RADIUS
 from ..data.scene import EnvironmentLight, Lighting, MAX_SEED, MAX_SPP, PointLight, ProbeScene
 from ..engine.results import Check, Validation
 
@@ -39,6 +39,9 @@ class Condition:
     disc: str = ""
     """The built-in disc map (`core.data.environment.DISCS`) that stands in for this condition's point
     light where that cannot resolve the material: empty for none."""
+    backdrop: str = ""
+    """The built-in backdrop (`core.data.environment.BACKDROPS`) that stands in for this condition's point
+    light where the source lets light through: empty for none."""
 
     def as_disc(self, measured: str = "") -> Condition:
         """This condition under a disc light of finite size where its point light is, at the same
@@ -50,23 +53,47 @@ class Condition:
                          f"shows this material's highlight smaller than a pixel{why})",
                          (EnvironmentLight(type="environment", map=self.disc),))
 
+    def as_backdrop(self, light: EnvironmentLight | None = None) -> Condition:
+        """This condition for a source that lets light through: a soft box where its point light is, at
+        the same irradiance, over a dim pattern seen through the sphere (`core.data.environment.backdrop`).
+        Under a point light (or a disc) alone what is behind a glass is black and only the rare path
+        that reflects the light lights a pixel: two renders part by 60-1450 %. ``light``: the backdrop
+        placed already (the scene's own light's)."""
+        light = light or EnvironmentLight(type="environment", map=self.backdrop)
+        return Condition(self.name, f"{self.label} over a backdrop",
+                         f"{self.description}; a soft box {2 * SOFT_RADIUS:g} degrees across in its place, over a "
+                         "dim pattern on every side that is seen through the sphere (the source lets light through)",
+                         (light,), self.given)
+
 
 CONDITIONS = (
     Condition(Lighting.GRAZING, "grazing light", "a point light 80 degrees from the view: light skimming across the sphere",
-              (PointLight(theta=80.0),), disc="grazing-disc"),
+              (PointLight(theta=80.0),), disc="grazing-disc",
+              backdrop="grazing-backdrop"),
     Condition(Lighting.RIM, "rim light", "a point light 120 degrees from the view, behind the sphere: a lit rim",
-              (PointLight(theta=120.0),), disc="rim-disc"),
+              (PointLight(theta=120.0),), disc="rim-disc",
+              backdrop="rim-backdrop"),
     Condition(Lighting.HEADLIGHT, "headlight", "a point light on the view axis, in front of the sphere",
-              (PointLight(theta=0.0),), disc="headlight-disc"),
+              (PointLight(theta=0.0),), disc="headlight-disc",
+              backdrop="headlight-backdrop"),
     Condition(Lighting.ENVIRONMENT, "studio environment", "the built-in studio environment (key, fill and rim lights)",
               (EnvironmentLight(type="environment", map="studio"),)),
 )
 
 
-def given_condition(scene: ProbeScene) -> Condition:
-    """The job's scene's own lights as a condition: checked when the fit ran under other lights."""
-    return Condition(Lighting.GIVEN, "scene as given", f"the job's scene ({scene.name}) with its own lights, which the fit "
-                     "did not use", tuple(scene.view_scenes()[0].lights), given=True)
+def given_condition(scene: ProbeScene, transmissive: bool = False) -> Condition:
+    """The job's scene's own lights as a condition: checked when the fit ran under other lights; for a
+    source that lets light through, its one point light as its backdrop (`Condition.as_backdrop`) where
+    one is built in its direction."""
+    lights = tuple(scene.view_scenes()[0].lights)
+    given = Condition(Lighting.GIVEN, "scene as given", f"the job's scene ({scene.name}) with its own lights, which "
+                      "the fit did not use", lights, given=True)
+    disc = disc_for(lights[0], scene) if transmissive and len(lights) == 1 and isinstance(lights[0], PointLight) \
+        else None
+    if disc is None:
+        return given
+    backdrop = disc.model_copy(update={"map": disc.map.removesuffix("-disc") + "-backdrop"})
+    return given.as_backdrop(backdrop)
 
 
 DEFAULT = PointLight()
@@ -103,6 +130,11 @@ def is_disc(light) -> bool:
     return isinstance(light, EnvironmentLight) and light.map in DISCS
 
 
+def is_backdrop(light) -> bool:
+    """A built-in soft box over the backdrop (`BACKDROPS`): placed as a disc is, rendered as an environment."""
+    return isinstance(light, EnvironmentLight) and light.map in BACKDROPS
+
+
 def place_disc(light: EnvironmentLight, scene: ProbeScene) -> EnvironmentLight:
     """A disc light at the irradiance the scene's first point light gives the sphere's centre (I / r²):
     a disc map's scale is its irradiance (`core.data.environment.disc`)."""
@@ -123,7 +155,7 @@ def disc_for(light: PointLight, scene: ProbeScene) -> EnvironmentLight | None:
 
 def _placed(light, scene: ProbeScene):
     return place_light(light, scene) if isinstance(light, PointLight) else \
-        place_disc(light, scene) if is_disc(light) else light
+        place_disc(light, scene) if is_disc(light) or is_backdrop(light) else light
 
 
 def _held_out(c: Condition, scene: ProbeScene, fit_keys: list) -> Condition:
@@ -186,13 +218,15 @@ def scenes(scene: ProbeScene, conditions=CONDITIONS, fit_lights=(),
 
 
 def held_out_scenes(scene: ProbeScene, given: bool = False, fit_lights=(), resolution: int | None = None,
-                    sharp: bool = False) -> list:
+                    sharp: bool = False, transmissive: bool = False) -> list:
     """Every condition a result is validated under, with its two half-sample scenes: the job's own
     lights first when the fit ran under others (``given``), each point light as its disc where the
     source is ``sharp`` (its highlight under a point light is smaller than a pixel:
-    `core.job.fitscene.SHARP_PX`); ``resolution``: the frontal point lights'."""
-    conditions = ((given_condition(scene),) if given else ()) + tuple(
-        c.as_disc() if sharp and c.disc else c for c in CONDITIONS)
+    `core.job.fitscene.SHARP_PX`), as its backdrop where the source is ``transmissive``;
+    ``resolution``: the frontal point lights'."""
+    conditions = ((given_condition(scene, transmissive),) if given else ()) + tuple(
+        c.as_backdrop() if transmissive and c.backdrop else c.as_disc() if sharp and c.disc else c
+        for c in CONDITIONS)
     return scenes(scene, conditions, fit_lights, resolution)
 
 
@@ -247,7 +281,7 @@ def _check(render_source, render_target, cond: Condition, a: ProbeScene, b: Prob
     tgt, tgt_noise = _mean_and_noise(render_target, ta, tb)
     err = relative_rmse(src, tgt)
     floor = float(np.hypot(src_noise, tgt_noise))
-    if cond.given:
+    if cond.given and not any(is_backdrop(x) for x in cond.lights):
         # Where a few samples carry the image (the sub-pixel highlight that sent the fit
         # elsewhere) one pair of renders is itself a lucky draw: two seeds of Au α 0.002 at
         # 64 spp differed by 3 % where a third differs from them by 70 %. The difference measured
@@ -272,7 +306,7 @@ def _measured(render_source, render_target, scene: ProbeScene, given_noise: floa
 
 def validate(render_source, render_target, scene: ProbeScene, problems, given: bool = False,
              given_noise: float = 0.0, fit_lights=(), resolution: int | None = None,
-             resolve_limit: float | None = None, sharp: bool = False) -> Validation:
+             resolve_limit: float | None = None, sharp: bool = False, transmissive: bool = False) -> Validation:
     """Render both sides under every condition (``render_*(scene) -> image``); ``problems(scene)``
     says why a side cannot render a condition (a light type it lacks), which is then skipped.
     ``given``: the fit ran under other lights than ``scene``'s, whose own are checked first;
@@ -281,14 +315,15 @@ def validate(render_source, render_target, scene: ProbeScene, problems, given: b
     ``resolution``: the frontal point lights' (`point_resolution`); ``resolve_limit``: a condition
     noisier than this is rendered again at more samples where that can resolve it (`_more_samples`),
     and a point light that even they cannot resolve gives way to its disc; ``sharp``: every point
-    light is its disc from the start (`held_out_scenes`)."""
+    light is its disc from the start (`held_out_scenes`); ``transmissive``: the source lets light through,
+    and every point light is its backdrop (`Condition.as_backdrop`)."""
     result = Validation()
     measure = functools.partial(_measured, render_source, render_target, scene, given_noise, resolve_limit)
 
     def blocked(sc: ProbeScene) -> str | None:
         return problems(sc) or _problem(sc)
 
-    for cond, a, b in held_out_scenes(scene, given, fit_lights, resolution, sharp):
+    for cond, a, b in held_out_scenes(scene, given, fit_lights, resolution, sharp, transmissive):
         why = blocked(a)
         if why:
             result.skipped[cond.name] = why

@@ -67,11 +67,13 @@ def test_remap_check_materialx_passes_every_row_and_calls_the_glass_a_limit():
 
 LIGHTS = {"probe": PointLight(), "grazing": PointLight(theta=80.0), "rim": PointLight(theta=120.0),
           "headlight": PointLight(theta=0.0), "studio": EnvironmentLight(type="environment", map="studio"),
-          "disc": EnvironmentLight(type="environment", map="probe-disc", scale=30 / 5.2 ** 2)}
+          "disc": EnvironmentLight(type="environment", map="probe-disc", scale=30 / 5.2 ** 2),
+          "backdrop": EnvironmentLight(type="environment", map="rim-backdrop", scale=30 / 5.2 ** 2)}
 
 
 @pytest.mark.parametrize("light, to_mitsuba", [("probe", 0.005), ("grazing", 0.015), ("rim", 0.035),
-                                                ("headlight", 0.005), ("studio", 0.015), ("disc", 0.015)])
+                                                ("headlight", 0.005), ("studio", 0.015), ("disc", 0.015),
+                                                ("backdrop", 0.015)])
 def test_a_white_lambertian_agrees_with_mitsuba_and_cycles_under_each_light(mx, mitsuba_adapter, cycles_adapter,
                                                                             light, to_mitsuba):
     """The held-out lights, the studio and a disc, at the validation's 64 px: within a fraction of a percent
