@@ -19,10 +19,10 @@ import numpy as np
 from brdfremap.core.data.appearance import Appearance, Kind, conductor_f0
 from brdfremap.core.data.environment import radiance
 from brdfremap.core.data.scene import EnvironmentLight, PointLight, ProbeScene
-from brdfremap.core.data.schemas import Value
+from brdfremap.core.data.schemas import Native, Value
 from brdfremap.core.data.textures import Texture, TextureMap
 from brdfremap.core.host.model import Model
-from brdfremap.core.host.protocol import Adapter, ModelChoice, check_image
+from brdfremap.core.host.protocol import Adapter, ModelChoice, RenderError, check_image
 
 from .browser import THREE, WEB, Page, chromium
 from .models import MODELS
@@ -60,6 +60,7 @@ class ThreeJsAdapter(Adapter):
     light_types = frozenset({"point", "environment"})
     version = "2"  # 2: the probe sphere has tangents (anisotropy turned from a frame three.js made from screen derivatives)
     textures = True
+    natives = True
     calibration = ("gltf_pbr", {"base_color": 0.8, "metallic": 0.0, "roughness": 1.0, "specular": 0.0})
     transmission_limit = ("three.js's transmission is screen-space, by design: a glass shows a blurred copy of what "
                           "was rendered behind it (the black background), not the environment refracted through the "
@@ -122,6 +123,22 @@ class ThreeJsAdapter(Adapter):
         """The first material of a glTF document, as three.js's GLTFLoader reads it, on the probe
         sphere (a `.gltf` this tool writes renders as its fit did)."""
         return self.render_request({"material": doc}, scene)
+
+    def render_native(self, native: Native, scene: ProbeScene, lobe: str | None = None,
+                      transmissive: bool = False) -> np.ndarray:
+        """A glTF material as its file holds it (`Native.element`: the material alone in a document, its
+        images embedded: every texture, texture transform and extension GLTFLoader reads), on the probe
+        sphere with its texture coordinates; no lobe of it apart."""
+        if lobe is not None:
+            raise RenderError(f"threejs: a material rendered as written has no {lobe} lobe of its own to render")
+        try:
+            doc = json.loads(native.element)
+        except ValueError:
+            raise RenderError(f"threejs: material {native.name!r} of {native.file} is not a glTF document") from None
+        return self.render_document(doc, scene)
+
+    def candidates(self) -> list[ModelChoice]:
+        return [ModelChoice("gltf_pbr", {}, "glTF's metallic-roughness, the one model three.js reads")]
 
     def render_layer(self, usda: str, scene: ProbeScene) -> np.ndarray:
         """The first mesh's material of a USD layer (text), as three.js's USDLoader reads it, on the

@@ -4,6 +4,8 @@ name, each on a sphere of its own in a row, so any viewer shows them), and a rea
 
 from __future__ import annotations
 
+import base64
+import hashlib
 import json
 import urllib.parse
 from pathlib import Path
@@ -11,7 +13,7 @@ from typing import Any
 
 from brdfremap.core.data.atomic import write_text_atomic
 from brdfremap.core.data.errors import ConfigError
-from brdfremap.core.data.schemas import Material, Value
+from brdfremap.core.data.schemas import Material, Native, Value
 from brdfremap.core.library.entries import Converted, Entry
 from brdfremap.core.data.textures import ColourSpace, Filter, Texture, mean_value, read_values, texture
 
@@ -45,10 +47,21 @@ def material_document(doc: dict[str, Any], index: int) -> dict[str, Any]:
                 texs.append(tex)
             ref["index"] = texs.index(tex)
         out.update(textures=texs, images=imgs, samplers=samplers)
-    used = sorted(mat.get("extensions", {}))
+    used = sorted(_extensions_in(mat))
     if used:
         out["extensionsUsed"] = used
     return out
+
+
+def _extensions_in(node: Any) -> set[str]:
+    """Every extension a material uses, its own and its texture references' (KHR_texture_transform): GLTFLoader
+    reads only those the document lists as used."""
+    if isinstance(node, list):
+        return set().union(*(_extensions_in(v) for v in node)) if node else set()
+    if not isinstance(node, dict):
+        return set()
+    own = set(node.get("extensions") or {}) if isinstance(node.get("extensions"), dict) else set()
+    return own.union(*(_extensions_in(v) for v in node.values()))
 
 
 def _texture_refs(node: Any) -> list[dict[str, Any]]:
@@ -127,9 +140,45 @@ class GltfReader:
         clipped = {k: spec.param(k).clip(tuple(v) if isinstance(v, (list, tuple)) else v) for k, v in params.items()}
         notes += [f"{k} {_shown(params[k])} is outside the model's bounds: read as {_shown(v)}"
                   for k, v in clipped.items() if _shown(v) != _shown(params[k])]
-        return Entry(name=name, file=str(path), notes=notes + said, textured=textured,
-                     material=Material(adapter="threejs", model="gltf_pbr", name=name, params=clipped,
-                                       textures=maps))
+        entry = Entry(name=name, file=str(path), notes=notes + said, textured=textured,
+                      material=Material(adapter="threejs", model="gltf_pbr", name=name, params=clipped,
+                                        textures=maps))
+        return _as_written(doc, blob, path, entry) if textured or notes or said else entry
+
+
+MIME = {".png": "image/png", ".jpg": "image/jpeg"}
+
+
+def _as_written(doc: dict[str, Any], blob: bytes | None, path: Path, entry: Entry) -> Entry:
+    """A material the reading does not carry whole (a texture, an extension or input it does not read), rendered
+    by three.js's GLTFLoader from the file's own material (`Material.native`: the material alone in a document,
+    its images embedded), as any glTF viewer shows it; where an image cannot be read, as read, and said."""
+    index = next(i for i, m in enumerate(doc["materials"]) if isinstance(m, dict) and
+                 (m.get("name") or f"material {i}") == entry.name)
+    try:
+        alone = material_document(_embedded(doc, blob, path, index), index)
+    except ConfigError as exc:
+        return entry.model_copy(update={"notes": [*entry.notes, f"not rendered as written: {exc}"]})
+    text = json.dumps(alone, sort_keys=True)
+    exts = doc["materials"][index].get("extensions") or {}
+    through = exts.get("KHR_materials_transmission") or {}
+    transmits = float(through.get("transmissionFactor", 0.0)) > 0.0 or "transmissionTexture" in through
+    native = Native(file=str(path.resolve()), name=entry.name, sha256=hashlib.sha256(text.encode()).hexdigest(),
+                    element=text, driven=tuple(entry.textured), transmits=transmits)
+    return entry.model_copy(update={"material": entry.material.model_copy(update={"native": native})})
+
+
+def _embedded(doc: dict[str, Any], blob: bytes | None, path: Path, index: int) -> dict[str, Any]:
+    """The document with every image material ``index`` reads as a data URI (a file beside it or a .glb's
+    buffer view), as the page reads one."""
+    used = {images.item(doc, "textures", ref["index"]).get("source") for ref in _texture_refs(doc["materials"][index])}
+    imgs = list(doc.get("images") or [])
+    for i in sorted(x for x in used if isinstance(x, int)):
+        file = images.image_file(doc, blob, path.parent, i)
+        data = base64.b64encode(file.read_bytes()).decode()
+        imgs[i] = {k: v for k, v in imgs[i].items() if k not in ("uri", "bufferView", "mimeType")} | \
+            {"uri": f"data:{MIME.get(file.suffix, 'image/png')};base64,{data}"}
+    return {**doc, "images": imgs} if imgs else doc
 
 
 def _maps(m: dict[str, Any], doc: dict[str, Any], blob: bytes | None, path: Path,

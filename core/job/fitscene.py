@@ -28,7 +28,7 @@ import numpy as np
 from ..data.metrics import l2, relative_rmse
 from ..data.scene import MAX_SPP, EnvironmentLight, PointLight, ProbeScene, View
 from ..data.settings import FitScene as Policy
-from ..data.environment import DISC_RADIUS
+from ..data.environment import DISC_RADIUS, SOFT_RADIUS
 from .validation import disc_for, place_light
 
 GOAL = 0.03
@@ -164,6 +164,11 @@ def choose_lights(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene,
         found = _discs(render, scene, noise, limit, why)
         if found is not None:
             return found
+    if transmissive and noise > GOAL and policy == Policy.AUTO and environment_ok and not scene.views \
+            and scene.environment is None:
+        found = _backdrop(render, scene, noise, limit)
+        if found is not None:
+            return found
     if (smooth or noise == math.inf or (transmissive and noise > GOAL)) and policy == Policy.AUTO and environment_ok \
             and scene.environment is None and not scene.views:
         # Taken however noisy: under the point lights there is nothing (or less) to fit (the verdict says how noisy).
@@ -222,6 +227,27 @@ def _resolved(render, scene: ProbeScene, limit: float) -> tuple[ProbeScene, floa
         scene = scene.with_(spp=min(_samples_for(n, scene.spp), scene.spp * MAX_SPP_FACTOR))
         n = source_noise(render, scene)
     return None if n > limit else (scene, n)
+
+
+def _backdrop(render, scene: ProbeScene, noise: float, limit: float) -> FitScene | None:
+    """For a source that lets light through: the scene with its point light as a soft box in its direction
+    over the backdrop (`core.data.environment.BACKDROPS`), where what is behind the sphere is seen through
+    it, at the samples that bring the source's noise to GOAL; None where the scene's lights have no backdrop
+    (more than one, or one in a direction none is built in) or it cannot resolve the source."""
+    discs = [disc_for(x, scene) for x in scene.point_lights]
+    if len(scene.lights) != 1 or None in discs:
+        return None
+    light = discs[0].model_copy(update={"map": discs[0].map.removesuffix("-disc") + "-backdrop"})
+    found = _resolved(render, scene.model_copy(update={"lights": [light],
+                                                       "name": f"{scene.name}, its light over a backdrop"}), limit)
+    if found is None:
+        return None
+    lit, n = found
+    shown = f"{noise:.0%} noise at {scene.spp} spp" if math.isfinite(noise) else "black there"
+    return FitScene(lit, f"light through the sphere, which a point light reaches by rare paths ({shown}): fitted "
+                         f"with the light as a soft box {2 * SOFT_RADIUS:g} degrees across, where it is, over a "
+                         f"backdrop seen through the sphere, at {lit.spp} spp ({n:.1%})",
+                    n, noise if math.isfinite(noise) else 0.0)
 
 
 def _environment(render, scene: ProbeScene, noise: float, limit: float, why: str,

@@ -224,7 +224,10 @@ def held_out_scenes(scene: ProbeScene, given: bool = False, fit_lights=(), resol
     source is ``sharp`` (its highlight under a point light is smaller than a pixel:
     `core.job.fitscene.SHARP_PX`), as its backdrop where the source is ``transmissive``;
     ``resolution``: the frontal point lights'."""
-    conditions = ((given_condition(scene, transmissive),) if given else ()) + tuple(
+    own = given_condition(scene, transmissive) if given else None
+    if own is not None and all(x.key() in [y.key() for y in fit_lights] for x in own.lights):
+        own = None  # the fit ran under the scene's own light over its backdrop: nothing held out
+    conditions = ((own,) if own is not None else ()) + tuple(
         c.as_backdrop() if transmissive and c.backdrop else c.as_disc() if sharp and c.disc else c
         for c in CONDITIONS)
     return scenes(scene, conditions, fit_lights, resolution)

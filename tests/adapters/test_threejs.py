@@ -484,12 +484,14 @@ def test_a_glb_from_blenders_exporter_converts_to_cycles_texel_by_texel(tmp_path
     assert {c["condition"] for c in record["checks"]} == {"scene", "environment"}
     assert all(c["error"] < 0.15 for c in record["checks"]), record["checks"]
     assert (tmp_path / "out" / "library.blend").is_file()
-    # Without a table: converted with its textures' constants (the images' means, a copper colour, not
-    # the factors' white), and its line says so.
+    # Without a table: a uniform material fitted to the .glb's material as three.js renders it from the file, its
+    # start the textures' constants (the images' means, a copper colour, not the factors' white), and its line
+    # says so.
     plain = remap("convert", glb, "--to", "cycles:principled", "--out", tmp_path / "flat", "--resolution", "48",
                   "--spp", "16", "--validate", "none", env={"XDG_CACHE_HOME": str(tmp_path / "cache")})
     assert plain.returncode == 0, plain.stdout + plain.stderr
-    assert "worn copper (its textures as constants: no table maps it) -> principled" in plain.stdout + plain.stderr
+    assert "worn copper (textured: a uniform material fitted to its rendering) -> principled" in \
+        plain.stdout + plain.stderr
     colour = entry.material.params["base_color"]
     assert colour[0] > colour[1] > colour[2] and colour[0] < 0.95, colour
 

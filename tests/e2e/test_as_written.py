@@ -213,3 +213,66 @@ def test_a_blend_materials_key_holds_its_images_content(everyday, tmp_path):
     after = {e.name: e.material.native for e in BlendReader().read(copy / "everyday.blend") if e.material.native}
     assert after["wood"].sha256 != before["wood"].sha256
     assert after["mix diffuse glossy"].sha256 == before["mix diffuse glossy"].sha256
+
+
+def _tiled_gltf(path) -> None:
+    """A glTF of two materials: an 8 x 8 checker on base colour tiled 4 times by KHR_texture_transform (which the
+    reading does not carry), and a plain red the reading carries whole."""
+    import base64
+
+    import OpenImageIO as oiio
+
+    y, x = np.mgrid[0:64, 0:64]
+    check = ((x // 8 + y // 8) % 2).astype(np.float32)[..., None]
+    img = (np.array([0.1, 0.1, 0.05]) + check * np.array([0.7, 0.3, 0.0])) * 255
+    png = path.with_suffix(".png")
+    out = oiio.ImageOutput.create(str(png))
+    out.open(str(png), oiio.ImageSpec(64, 64, 3, oiio.UINT8))
+    out.write_image(img.round().astype(np.uint8))
+    out.close()
+    uri = "data:image/png;base64," + base64.b64encode(png.read_bytes()).decode()
+    tiled = {"index": 0, "extensions": {"KHR_texture_transform": {"scale": [4, 4]}}}
+    path.write_text(json.dumps({
+        "asset": {"version": "2.0"}, "images": [{"uri": uri}], "textures": [{"source": 0}],
+        "extensionsUsed": ["KHR_texture_transform"],
+        "materials": [{"name": "tiled checker", "pbrMetallicRoughness": {"baseColorTexture": tiled, "metallicFactor": 0.0,
+                                                                         "roughnessFactor": 0.4}},
+                      {"name": "plain red", "pbrMetallicRoughness": {"baseColorFactor": [0.6, 0.1, 0.05, 1.0],
+                                                                     "metallicFactor": 0.0, "roughnessFactor": 0.4}}]}))
+
+
+def test_a_gltf_material_the_reading_does_not_carry_is_rendered_by_threejs_from_the_file(tmp_path):
+    """Its texture transform (and any input or extension the reading drops) as GLTFLoader reads the file: the
+    checker tiled 4 times shows 4 times the edges of the untiled one; a material read whole has no native."""
+    from brdfremap.adapters.threejs.adapter import ThreeJsAdapter
+    from brdfremap.adapters.threejs.library import GltfReader
+    from brdfremap.core.data.scene import ProbeScene
+
+    need_adapter(ThreeJsAdapter)
+    _tiled_gltf(tmp_path / "m.gltf")
+    checker, red = GltfReader().read(tmp_path / "m.gltf")
+    assert red.material.native is None
+    native = checker.material.native
+    assert native.driven == ("base_color <- texture 0",) and not native.transmits
+    doc = json.loads(native.element)
+    assert doc["extensionsUsed"] == ["KHR_texture_transform"] and doc["images"][0]["uri"].startswith("data:image/png")
+    untiled = native.model_copy(update={"element": native.element.replace('"scale": [4, 4]', '"scale": [1, 1]')})
+    scene = ProbeScene(resolution=128)
+    with ThreeJsAdapter() as three:
+        edges = [float(np.abs(np.diff(three.render_native(n, scene).mean(-1), axis=1)).sum()) for n in (native, untiled)]
+    assert edges[0] > 1.8 * edges[1], edges  # 72.5 against 33.7 (the shading and highlight in both)
+
+
+def test_a_tiled_gltf_converts_against_its_own_rendering(tmp_path, cycles_adapter):
+    from brdfremap.adapters.threejs.adapter import ThreeJsAdapter
+
+    need_adapter(ThreeJsAdapter)
+    _tiled_gltf(tmp_path / "m.gltf")
+    out = tmp_path / "out"
+    assert main(["convert", str(tmp_path / "m.gltf"), "--to", "cycles:principled", "--only", "tiled checker",
+                 "--out", str(out), *FAST]) == 0
+    (row,) = json.loads((out / "convert.json").read_text())["materials"]
+    result = json.loads((out / "materials" / row["slot"] / "result.json").read_text())
+    assert result["source_renders"] > 0 and "uniform where the source is not" in result["reason"]
+    mean = result["job"]["source"]["params"]["base_color"]  # the image's mean
+    assert result["params"]["base_color"] == pytest.approx(mean, rel=0.1, abs=0.005)
