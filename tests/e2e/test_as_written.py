@@ -276,3 +276,24 @@ def test_a_tiled_gltf_converts_against_its_own_rendering(tmp_path, cycles_adapte
     assert result["source_renders"] > 0 and "uniform where the source is not" in result["reason"]
     mean = result["job"]["source"]["params"]["base_color"]  # the image's mean
     assert result["params"]["base_color"] == pytest.approx(mean, rel=0.1, abs=0.005)
+
+
+def test_a_clear_glass_is_fitted_and_judged_over_a_backdrop_not_left_unchecked(tmp_path, mitsuba_adapter,
+                                                                                  cycles_adapter):
+    """Mitsuba's clear dielectric to Cycles' Principled: fitted with the probe's light over the backdrop and judged
+    under every held-out light over it (and the studio): before, its point lights (60-1450 % noise) and its
+    studio fit scene (12 % at 256 spp) left it unchecked."""
+    src = tmp_path / "glass.yaml"
+    src.write_text("adapter: mitsuba\nmodel: dielectric\nparams: {int_ior: 1.5}\n")
+    out = tmp_path / "out"
+    assert main(["--source", str(src), "--adapter", "cycles", "--model", "principled", "--out", str(out),
+                 "--resolution", "64", "--spp", "32", "--quiet"]) == 0
+    result = json.loads((out / "result.json").read_text())
+    assert "over a backdrop" in result["fit_scene"]["why"]
+    labels = {c["label"] for c in result["validation"]}
+    assert {"grazing light over a backdrop", "rim light over a backdrop", "headlight over a backdrop",
+            "studio environment"} <= labels, labels
+    assert all(c["noise_floor"] <= 0.1 for c in result["validation"]), result["validation"]
+    assert result["verdict"] == "ok", result["reason"]
+    assert result["params"]["transmission_weight"] == pytest.approx(1.0, abs=0.05)
+    assert result["params"]["ior"] == pytest.approx(1.5, abs=0.1)
