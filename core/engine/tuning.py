@@ -7,7 +7,7 @@ from pydantic import Field
 
 from ..data.model import Strict
 
-ENGINE_VERSION = 14
+ENGINE_VERSION = 15
 """Bump whenever a change in core/ would change a result: the engine, but also the informed start
 (execute.py, appearance.py), the renders' cache and rounding (renders.py) or the metrics. A stored
 result is reused (a resumed sweep, a library rerun) only when its job key, which includes this
