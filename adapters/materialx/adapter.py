@@ -202,6 +202,10 @@ class MaterialXAdapter(Adapter):
             self._maps[key] = files
         return self._maps[key]
 
+    def candidates(self) -> list[ModelChoice]:
+        return [ModelChoice("open_pbr_surface", {}, "no reading: OpenPBR, MaterialX's most general surface"),
+                ModelChoice("standard_surface", {}, "no reading: Autodesk Standard Surface")]
+
     def model_for(self, appearance: Appearance) -> ModelChoice:
         return ModelChoice("open_pbr_surface", {}, "OpenPBR Surface: MaterialX's physically based surface of today")
 

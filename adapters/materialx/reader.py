@@ -50,14 +50,31 @@ class MaterialXReader:
         if not valid:
             first = why.strip().splitlines()[0]
             raise ConfigError(f"is not valid MaterialX: {first}", file=str(path), field=_line_of(path, first))
-        return [_as_written(m, path, material_entry(m, mat, str(path), upgraded)) for mat in doc.getMaterialNodes()]
+        return [_as_written(m, path, material_entry(m, mat, str(path), upgraded), _partly_read(m, mat))
+                for mat in doc.getMaterialNodes()]
 
 
-def _as_written(m, path: Path, entry: Entry) -> Entry:
-    """A material an image or a node graph drives, rendered by MaterialX from the document as written
-    (`Material.native`: the document with this material alone, its file names made absolute), where
-    every file it names is there; else as read, and said."""
-    if entry.material is None or not entry.textured:
+def _partly_read(m, mat) -> bool:
+    """Whether the material's reading leaves part of its shader out: a nodedef of the document's own whose
+    graph is more than one shader of a model (a mix of shaders, a shader a node feeds)."""
+    from .models import MODELS
+
+    shaders = [s for s in m.getShaderNodes(mat) if s.getType() == "surfaceshader"]
+    if not shaders or MODELS.get(shaders[0].getCategory()) is not None:
+        return False
+    nodedef = shaders[0].getNodeDef()
+    graph = nodedef.getImplementation() if nodedef is not None else None
+    if graph is None or not graph.isA(m.NodeGraph):
+        return False
+    inner = {n.getName() for n in graph.getNodes() if n.getType() == "surfaceshader"}
+    return len(inner) != 1 or any(o.getNodeName() not in inner for o in graph.getOutputs())
+
+
+def _as_written(m, path: Path, entry: Entry, partly: bool = False) -> Entry:
+    """A material an image or a node graph drives, or whose reading leaves part of it out (``partly``), rendered
+    by MaterialX from the document as written (`Material.native`: the document with this material alone, its
+    file names made absolute), where every file it names is there; else as read, and said."""
+    if entry.material is None or (not entry.textured and entry.material.model and not partly):
         return entry
     path = path.resolve()
     raw = m.createDocument()
@@ -95,8 +112,7 @@ def material_entry(m, mat, file: str, upgraded: dict[str, list[str]] | None = No
     shader = shaders[0]
     model = MODELS.get(shader.getCategory())
     if model is None:
-        return Entry(name=name, file=file, problem=f"shader {shader.getCategory()!r} is not a surface this tool "
-                                                   f"renders (known: {', '.join(sorted(MODELS))})")
+        return _unread(shader, name, file)
     notes = list(upgraded.get(shader.getName(), []))
     try:
         params, textured = _inputs(shader, model, notes)
@@ -110,13 +126,61 @@ def material_entry(m, mat, file: str, upgraded: dict[str, list[str]] | None = No
                  material=Material(adapter="materialx", model=model.name, params=params, name=name, textures=textures))
 
 
-def _inputs(shader, model, notes: list[str]) -> tuple[dict, list[str]]:
+HAIR_BSDFS = {"chiang_hair_bsdf"}
+"""MaterialX's hair BSDFs (1.39): lit along a fibre."""
+HAIR = "hair is drawn along fibres (a curve's tangent), and the probe is a sphere: no renderer here draws it as its " \
+       "author's scene does"
+
+
+def _unread(shader, name: str, file: str) -> Entry:
+    """A shader no model reads: a node graph of the document's own (a nodedef it implements) is a material with no
+    reading, rendered as written by MaterialX (`_as_written`); hair, or a shader with no implementation here, is
+    refused, one line."""
+    from .models import MODELS
+
+    category = shader.getCategory()
+    nodedef = shader.getNodeDef()
+    graph = nodedef.getImplementation() if nodedef is not None else None
+    if graph is None or not graph.isA(mx().NodeGraph):
+        return Entry(name=name, file=file, problem=f"shader {category!r} is not a surface this tool renders (known: "
+                                                   f"{', '.join(sorted(MODELS))}), and no node graph of the document "
+                                                   "implements it")
+    hair = sorted({n.getCategory() for n in graph.getNodes()} & HAIR_BSDFS)
+    if hair:
+        return Entry(name=name, file=file, problem=f"shader {category!r} is {', '.join(hair)}: {HAIR}")
+    said = f"shader {category!r} is a node graph of the document's own"
+    inner = [n for n in graph.getNodes() if n.getType() == "surfaceshader" and MODELS.get(n.getCategory()) is not None]
+    if len(inner) != 1:
+        return Entry(name=name, file=file, notes=[f"{said}: rendered as written, and fitted without a reading (no one "
+                                                  "shader of a model in it)"],
+                     material=Material(adapter="materialx", model="", name=name))
+    model = MODELS.get(inner[0].getCategory())
+    whole = all(o.getNodeName() == inner[0].getName() for o in graph.getOutputs())
+    how = "the whole of it: read as it" if whole else \
+        "not all of it: rendered as written, and read as it for the target model and the fit's start"
+    notes = [f"{said}; its {inner[0].getCategory()} {inner[0].getName()!r} is {how} (its inputs the node's values)"]
+    params, driven = _inputs(inner[0], model, notes, outer=shader)
+    notes += clip_into(model, params)
+    return Entry(name=name, file=file, notes=notes, textured=driven,
+                 material=Material(adapter="materialx", model=model.name, params=params, name=name))
+
+
+def _inputs(shader, model, notes: list[str], outer=None) -> tuple[dict, list[str]]:
     """The values the shader node gives its inputs that are the model's parameters (linear colours),
-    and the inputs a graph drives (read at their defaults, unless an image: `_textures`)."""
+    and the inputs a graph drives (read at their defaults, unless an image: `_textures`). ``outer``: the
+    node of a nodedef whose graph holds ``shader``: an input bound to its interface reads the node's value
+    (or the nodedef's default)."""
     params, textured = {}, []
     for inp in shader.getInputs():
         pname = inp.getName()
         if pname not in model.names:
+            continue
+        if outer is not None and inp.hasInterfaceName():
+            bound = outer.getActiveInput(inp.getInterfaceName())
+            if bound is not None and bound.hasValueString() and bound.getConnectedNode() is None:
+                params[pname] = _value(outer, bound, notes)
+            else:
+                textured.append(f"{pname} <- {inp.getInterfaceName()} of {outer.getName()!r}")
             continue
         if inp.getConnectedNode() is not None or inp.hasNodeGraphString() or inp.hasOutputString() \
                 or inp.hasInterfaceName():

@@ -297,3 +297,49 @@ def test_a_clear_glass_is_fitted_and_judged_over_a_backdrop_not_left_unchecked(t
     assert result["verdict"] == "ok", result["reason"]
     assert result["params"]["transmission_weight"] == pytest.approx(1.0, abs=0.05)
     assert result["params"]["ior"] == pytest.approx(1.5, abs=0.1)
+
+
+TWO_TONE = DATA / "materialx" / "custom" / "two_tone.mtlx"
+
+
+def test_a_materialx_nodedef_of_the_documents_own_is_read_through_its_graph_or_rendered_as_written():
+    """A shader no model names, implemented by a node graph in the document: read as the one shader of a model its
+    graph is (its interface values bound), rendered as written where the graph is more than that (before: "not a
+    surface this tool renders"); hair stays refused, one line saying why."""
+    from brdfremap.adapters.materialx.adapter import MaterialXAdapter
+    from brdfremap.adapters.materialx.reader import MaterialXReader
+
+    blue, mixed = MaterialXReader().read(TWO_TONE)
+    assert blue.material.model == "standard_surface" and blue.material.native is None
+    assert blue.material.params == {"base_color": (0.2, 0.3, 0.7), "specular_roughness": 0.3, "coat": 0.5}
+    assert mixed.material.model == "" and mixed.material.native is not None  # two shaders mixed: no one reading
+    assert "two_tone_mixed" in mixed.material.native.element and not mixed.material.native.driven
+    assert [c.model for c in MaterialXAdapter.candidates(MaterialXAdapter.__new__(MaterialXAdapter))] == [
+        "open_pbr_surface", "standard_surface"]
+
+
+def test_materialx_hair_is_refused_in_one_line_saying_why(corpus):
+    from brdfremap.adapters.materialx.reader import MaterialXReader
+
+    (hair,) = MaterialXReader().read(corpus / "materialx" / "SimpleHair" / "simple_hair_default.mtlx")
+    assert hair.material is None
+    assert hair.problem == ("shader 'simple_hair' is chiang_hair_bsdf: hair is drawn along fibres (a curve's tangent), "
+                            "and the probe is a sphere: no renderer here draws it as its author's scene does")
+
+
+def test_a_mixed_materialx_nodedef_renders_as_written_by_materialx(tmp_path):
+    """The mix of a blue plastic and a metal, rendered by MaterialX from the document: between the two alone."""
+    from brdfremap.adapters.materialx.adapter import MaterialXAdapter
+    from brdfremap.adapters.materialx.reader import MaterialXReader
+    from brdfremap.core.data.scene import ProbeScene
+
+    need_adapter(MaterialXAdapter)
+    _, mixed = MaterialXReader().read(TWO_TONE)
+    scene = ProbeScene(resolution=32)
+    with MaterialXAdapter() as mx:
+        img = mx.render_native(mixed.material.native, scene)
+        plastic = mx.render("standard_surface", mx.models["standard_surface"].complete(
+            {"base_color": (0.6, 0.1, 0.05), "specular_roughness": 0.3}), scene)
+        metal = mx.render("standard_surface", mx.models["standard_surface"].complete(
+            {"metalness": 1.0, "specular_roughness": 0.2}), scene)
+    assert np.allclose(img, 0.3 * metal + 0.7 * plastic, rtol=0.02, atol=1e-3)
