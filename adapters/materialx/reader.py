@@ -50,8 +50,18 @@ class MaterialXReader:
         if not valid:
             first = why.strip().splitlines()[0]
             raise ConfigError(f"is not valid MaterialX: {first}", file=str(path), field=_line_of(path, first))
-        return [_as_written(m, path, material_entry(m, mat, str(path), upgraded), _partly_read(m, mat))
+        return [needs_document(_as_written(m, path, material_entry(m, mat, str(path), upgraded), _partly_read(m, mat)))
                 for mat in doc.getMaterialNodes()]
+
+
+def needs_document(entry: Entry) -> Entry:
+    """A material with no reading that is not rendered as written either (its images missing, or a MaterialX shader
+    in USD, which is not a document to render): refused, saying why."""
+    if entry.material is None or entry.material.model or entry.material.native is not None:
+        return entry
+    why = entry.notes[-1] if entry.notes else "no model reads it"
+    return Entry(name=entry.name, file=entry.file, problem=f"{why}; it is rendered only as written, from its .mtlx "
+                                                           "document with every image it names")
 
 
 def _partly_read(m, mat) -> bool:
@@ -68,6 +78,28 @@ def _partly_read(m, mat) -> bool:
         return False
     inner = {n.getName() for n in graph.getNodes() if n.getType() == "surfaceshader"}
     return len(inner) != 1 or any(o.getNodeName() not in inner for o in graph.getOutputs())
+
+
+TRANSMITTING = {"dielectric_bsdf", "generalized_schlick_bsdf", "translucent_bsdf", "subsurface_bsdf"}
+"""pbrlib's BSDFs that may let light through a surface (the first two unless their scatter_mode is R)."""
+
+
+def _transmits(doc, name: str) -> bool:
+    """Whether material ``name``'s own node graphs hold a BSDF that lets light through (its renders then take the
+    paths through the sphere, its held-out lights a backdrop seen through it)."""
+    doc.setDataLibrary(standard_libraries())  # the standard nodedefs, for their defaults (a BSDF's scatter_mode)
+    mat = doc.getNode(name)
+    graphs = [nd.getImplementation() for s in mx().getShaderNodes(mat) for nd in [s.getNodeDef()] if nd is not None]
+    nodes = [n for g in graphs if g is not None and g.isA(mx().NodeGraph) for n in g.getNodes()]
+    return any(n.getCategory() in TRANSMITTING and _scatter_mode(n) != "R" for n in nodes)
+
+
+def _scatter_mode(node) -> str:
+    """A BSDF node's scatter_mode as set, else its nodedef's default ('' where it has none)."""
+    inp = node.getInput("scatter_mode")
+    if inp is None and node.getNodeDef() is not None:
+        inp = node.getNodeDef().getActiveInput("scatter_mode")
+    return inp.getValueString() if inp is not None else ""
 
 
 def _as_written(m, path: Path, entry: Entry, partly: bool = False) -> Entry:
@@ -94,7 +126,7 @@ def _as_written(m, path: Path, entry: Entry, partly: bool = False) -> Entry:
     for f in files:
         digest.update(f.read_bytes())
     native = Native(file=str(path.resolve()), name=entry.name, sha256=digest.hexdigest(), element=text,
-                    driven=tuple(entry.textured))
+                    driven=tuple(entry.textured), transmits=_transmits(raw, entry.name))
     return entry.model_copy(update={"material": entry.material.model_copy(update={"native": native})})
 
 
@@ -133,9 +165,9 @@ HAIR = "hair is drawn along fibres (a curve's tangent), and the probe is a spher
 
 
 def _unread(shader, name: str, file: str) -> Entry:
-    """A shader no model reads: a node graph of the document's own (a nodedef it implements) is a material with no
-    reading, rendered as written by MaterialX (`_as_written`); hair, or a shader with no implementation here, is
-    refused, one line."""
+    """A shader no model reads, implemented by a node graph: read as the one shader of a model in it where there is
+    one, else a material with no reading, rendered as written by MaterialX (`_as_written`); hair, or a shader with
+    no graph, is refused, one line."""
     from .models import MODELS
 
     category = shader.getCategory()
@@ -143,12 +175,11 @@ def _unread(shader, name: str, file: str) -> Entry:
     graph = nodedef.getImplementation() if nodedef is not None else None
     if graph is None or not graph.isA(mx().NodeGraph):
         return Entry(name=name, file=file, problem=f"shader {category!r} is not a surface this tool renders (known: "
-                                                   f"{', '.join(sorted(MODELS))}), and no node graph of the document "
-                                                   "implements it")
+                                                   f"{', '.join(sorted(MODELS))}), and no node graph implements it")
     hair = sorted({n.getCategory() for n in graph.getNodes()} & HAIR_BSDFS)
     if hair:
         return Entry(name=name, file=file, problem=f"shader {category!r} is {', '.join(hair)}: {HAIR}")
-    said = f"shader {category!r} is a node graph of the document's own"
+    said = f"shader {category!r} is implemented by a node graph"
     inner = [n for n in graph.getNodes() if n.getType() == "surfaceshader" and MODELS.get(n.getCategory()) is not None]
     if len(inner) != 1:
         return Entry(name=name, file=file, notes=[f"{said}: rendered as written, and fitted without a reading (no one "
@@ -159,7 +190,10 @@ def _unread(shader, name: str, file: str) -> Entry:
     how = "the whole of it: read as it" if whole else \
         "not all of it: rendered as written, and read as it for the target model and the fit's start"
     notes = [f"{said}; its {inner[0].getCategory()} {inner[0].getName()!r} is {how} (its inputs the node's values)"]
-    params, driven = _inputs(inner[0], model, notes, outer=shader)
+    try:
+        params, driven = _inputs(inner[0], model, notes, outer=shader)
+    except ConfigError as exc:  # one material's value (an unknown colour space): that material, not the file
+        return Entry(name=name, file=file, problem=str(exc))
     notes += clip_into(model, params)
     return Entry(name=name, file=file, notes=notes, textured=driven,
                  material=Material(adapter="materialx", model=model.name, params=params, name=name))
@@ -176,7 +210,9 @@ def _inputs(shader, model, notes: list[str], outer=None) -> tuple[dict, list[str
         if pname not in model.names:
             continue
         if outer is not None and inp.hasInterfaceName():
-            bound = outer.getActiveInput(inp.getInterfaceName())
+            nodedef = outer.getNodeDef()
+            bound = outer.getActiveInput(inp.getInterfaceName()) or \
+                (nodedef.getActiveInput(inp.getInterfaceName()) if nodedef is not None else None)
             if bound is not None and bound.hasValueString() and bound.getConnectedNode() is None:
                 params[pname] = _value(outer, bound, notes)
             else:

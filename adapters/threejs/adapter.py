@@ -8,6 +8,7 @@ is nil."""
 
 from __future__ import annotations
 
+import base64
 import hashlib
 import importlib.util
 import json
@@ -18,6 +19,7 @@ import numpy as np
 
 from brdfremap.core.data.appearance import Appearance, Kind, conductor_f0
 from brdfremap.core.data.environment import radiance
+from brdfremap.core.data.errors import ConfigError
 from brdfremap.core.data.scene import EnvironmentLight, PointLight, ProbeScene
 from brdfremap.core.data.schemas import Native, Value
 from brdfremap.core.data.textures import Texture, TextureMap
@@ -25,6 +27,7 @@ from brdfremap.core.host.model import Model
 from brdfremap.core.host.protocol import Adapter, ModelChoice, RenderError, check_image
 
 from .browser import THREE, WEB, Page, chromium
+from .images import kind as image_kind
 from .models import MODELS
 
 MAX_TARGET = 8192
@@ -49,6 +52,24 @@ def environment_rows(px: np.ndarray) -> np.ndarray:
     / 2π) as three.js samples an equirectangular texture (u = atan2(z, x) / 2π + 1/2, v = asin(y) / π
     + 1/2, the first row at v = 0): rows bottom first, turned a quarter of the way round."""
     return np.ascontiguousarray(np.roll(px[::-1], px.shape[1] // 4, axis=1), dtype=np.float32)
+
+
+def embedded(image: dict[str, Any], native: Native) -> dict[str, Any]:
+    """An image of a material rendered as written (its file's absolute path: `library._alone`) as the data URI the
+    page reads; a PNG or JPEG only."""
+    where = f"threejs: material {native.name!r} of {native.file}: image {image.get('uri')!r}"
+    try:
+        data = Path(str(image.get("uri", ""))).read_bytes()
+    except OSError as exc:
+        raise RenderError(f"{where} cannot be read ({exc.strerror or exc})") from None
+    try:
+        mime = MIME[image_kind(data, where)]
+    except ConfigError as exc:
+        raise RenderError(str(exc)) from None
+    return {**image, "uri": f"data:{mime};base64,{base64.b64encode(data).decode()}"}
+
+
+MIME = {".png": "image/png", ".jpg": "image/jpeg"}
 
 
 class ThreeJsAdapter(Adapter):
@@ -135,7 +156,7 @@ class ThreeJsAdapter(Adapter):
             doc = json.loads(native.element)
         except ValueError:
             raise RenderError(f"threejs: material {native.name!r} of {native.file} is not a glTF document") from None
-        return self.render_document(doc, scene)
+        return self.render_document({**doc, "images": [embedded(x, native) for x in doc.get("images", [])]}, scene)
 
     def candidates(self) -> list[ModelChoice]:
         return [ModelChoice("gltf_pbr", {}, "glTF's metallic-roughness, the one model three.js reads")]

@@ -108,7 +108,10 @@ TEXTURES = {"baseColorTexture": "base_color", "metallicRoughnessTexture": "metal
             "clearcoatNormalTexture": "the clearcoat's normals", "sheenColorTexture": "sheen_color",
             "sheenRoughnessTexture": "sheen_roughness", "transmissionTexture": "transmission",
             "anisotropyTexture": "anisotropy", "iridescenceTexture": "iridescence",
-            "iridescenceThicknessTexture": "iridescence_thickness"}
+            "iridescenceThicknessTexture": "iridescence_thickness", "thicknessTexture": "the volume's thickness",
+            "diffuseTransmissionTexture": "diffuse transmission",
+            "diffuseTransmissionColorTexture": "the diffuse transmission's colour",
+            "diffuseTexture": "the specular-glossiness diffuse", "specularGlossinessTexture": "specular and glossiness"}
 """The textures a glTF material may drive its inputs with, and what each drives."""
 
 

@@ -41,10 +41,10 @@ def image_file(doc: dict[str, Any], blob: bytes | None, folder: Path, index: int
         raise ConfigError(f"{field}.uri is not a string")
     if isinstance(uri, str) and _scheme(uri, field) != "data":
         path = _local(folder, uri, f"{field}.uri")
-        _kind(_read(path, 0, len(max(MAGIC, key=len)), f"{field}.uri"), f"{field} ({path})")
+        kind(_read(path, 0, len(max(MAGIC, key=len)), f"{field}.uri"), f"{field} ({path})")
         return path
     data = _data_uri(uri, f"{field}.uri") if isinstance(uri, str) else _buffer_view(doc, blob, folder, image, index)
-    suffix = _kind(data, field)
+    suffix = kind(data, field)
     path = cache_folder() / f"{hashlib.sha256(data).hexdigest()}{suffix}"
     if not path.is_file():
         try:
@@ -97,7 +97,7 @@ def _read(path: Path, start: int, length: int, field: str) -> bytes:
         raise ConfigError(f"{field}: cannot read {path}: {exc.strerror or exc}") from None
 
 
-def _kind(data: bytes, field: str) -> str:
+def kind(data: bytes, field: str) -> str:
     suffix = next((s for magic, s in MAGIC.items() if data[:len(magic)] == magic), None)
     if suffix is None:
         raise ConfigError(f"{field} is neither a PNG nor a JPEG image")

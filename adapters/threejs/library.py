@@ -4,7 +4,6 @@ name, each on a sphere of its own in a row, so any viewer shows them), and a rea
 
 from __future__ import annotations
 
-import base64
 import hashlib
 import json
 import urllib.parse
@@ -22,10 +21,11 @@ from .models import MODELS
 from .spheres import sphere_document
 
 
-def material_document(doc: dict[str, Any], index: int) -> dict[str, Any]:
+def material_document(doc: dict[str, Any], index: int, embedded: bool = True) -> dict[str, Any]:
     """One material of a glTF document, alone in a document of its own (as the adapter renders one),
     with the textures, images and samplers it reads, numbered anew. Its images must be embedded as
-    data URIs (as this tool writes them): the page reads nothing else."""
+    data URIs (as this tool writes them): the page reads nothing else; ``embedded`` false: they are files,
+    which the adapter embeds (`ThreeJsAdapter.render_native`)."""
     mat = json.loads(json.dumps(doc["materials"][index]))
     out: dict[str, Any] = {"asset": {"version": "2.0"}, "materials": [mat]}
     refs = _texture_refs(mat)
@@ -37,7 +37,8 @@ def material_document(doc: dict[str, Any], index: int) -> dict[str, Any]:
                                     ("sampler", doc.get("samplers", []), samplers)):
                 if key in tex:
                     item = pool[tex[key]]
-                    if key == "source" and urllib.parse.urlparse(str(item.get("uri", ""))).scheme != "data":
+                    if key == "source" and embedded and \
+                            urllib.parse.urlparse(str(item.get("uri", ""))).scheme != "data":
                         raise ConfigError(f"images[{tex[key]}] is not embedded as a data URI: render the file's "
                                           "materials as this tool writes them")
                     if item not in into:
@@ -126,13 +127,14 @@ class GltfReader:
         name = m.get("name") if isinstance(m, dict) and isinstance(m.get("name"), str) and m["name"] else \
             f"material {i}"
         try:
-            return GltfReader._read_entry(m, name, path, doc, blob)
+            return GltfReader._read_entry(m, i, name, path, doc, blob)
         except (TypeError, ValueError, AttributeError) as exc:
             return Entry(name=name, file=str(path), problem=f"materials[{i}] is malformed glTF ({_first_line(exc)}): "
                                                             "check it with the Khronos glTF validator")
 
     @staticmethod
-    def _read_entry(m: dict[str, Any], name: str, path: Path, doc: dict[str, Any], blob: bytes | None) -> Entry:
+    def _read_entry(m: dict[str, Any], index: int, name: str, path: Path, doc: dict[str, Any],
+                    blob: bytes | None) -> Entry:
         params, notes, textured = gltf.read_material(m)
         maps, constants, said = _maps(m, doc, blob, path, name)
         params.update(constants)
@@ -143,42 +145,41 @@ class GltfReader:
         entry = Entry(name=name, file=str(path), notes=notes + said, textured=textured,
                       material=Material(adapter="threejs", model="gltf_pbr", name=name, params=clipped,
                                         textures=maps))
-        return _as_written(doc, blob, path, entry) if textured or notes or said else entry
+        return _as_written(doc, blob, path, entry, index) if textured or notes or said else entry
 
 
-MIME = {".png": "image/png", ".jpg": "image/jpeg"}
-
-
-def _as_written(doc: dict[str, Any], blob: bytes | None, path: Path, entry: Entry) -> Entry:
+def _as_written(doc: dict[str, Any], blob: bytes | None, path: Path, entry: Entry, index: int) -> Entry:
     """A material the reading does not carry whole (a texture, an extension or input it does not read), rendered
-    by three.js's GLTFLoader from the file's own material (`Material.native`: the material alone in a document,
-    its images embedded), as any glTF viewer shows it; where an image cannot be read, as read, and said."""
-    index = next(i for i, m in enumerate(doc["materials"]) if isinstance(m, dict) and
-                 (m.get("name") or f"material {i}") == entry.name)
+    by three.js's GLTFLoader from the file's own material ``index`` (`Material.native`: the material alone in a
+    document, each image it reads named by its file, which `ThreeJsAdapter.render_native` embeds), as any glTF
+    viewer shows it; where an image cannot be read, as read, and said."""
     try:
-        alone = material_document(_embedded(doc, blob, path, index), index)
+        alone, files = _alone(doc, blob, path, index)
     except ConfigError as exc:
         return entry.model_copy(update={"notes": [*entry.notes, f"not rendered as written: {exc}"]})
     text = json.dumps(alone, sort_keys=True)
+    digest = hashlib.sha256(text.encode())
+    for f in files:
+        digest.update(f.read_bytes())
     exts = doc["materials"][index].get("extensions") or {}
     through = exts.get("KHR_materials_transmission") or {}
     transmits = float(through.get("transmissionFactor", 0.0)) > 0.0 or "transmissionTexture" in through
-    native = Native(file=str(path.resolve()), name=entry.name, sha256=hashlib.sha256(text.encode()).hexdigest(),
-                    element=text, driven=tuple(entry.textured), transmits=transmits)
+    native = Native(file=str(path.resolve()), name=entry.name, sha256=digest.hexdigest(), element=text,
+                    driven=tuple(entry.textured), transmits=transmits)
     return entry.model_copy(update={"material": entry.material.model_copy(update={"native": native})})
 
 
-def _embedded(doc: dict[str, Any], blob: bytes | None, path: Path, index: int) -> dict[str, Any]:
-    """The document with every image material ``index`` reads as a data URI (a file beside it or a .glb's
-    buffer view), as the page reads one."""
+def _alone(doc: dict[str, Any], blob: bytes | None, path: Path, index: int) -> tuple[dict[str, Any], list[Path]]:
+    """Material ``index`` alone in a document, each image it reads (a file beside the glTF or a .glb's buffer view,
+    written to the cache by content) named by its absolute path; and those files."""
     used = {images.item(doc, "textures", ref["index"]).get("source") for ref in _texture_refs(doc["materials"][index])}
     imgs = list(doc.get("images") or [])
+    files = []
     for i in sorted(x for x in used if isinstance(x, int)):
-        file = images.image_file(doc, blob, path.parent, i)
-        data = base64.b64encode(file.read_bytes()).decode()
-        imgs[i] = {k: v for k, v in imgs[i].items() if k not in ("uri", "bufferView", "mimeType")} | \
-            {"uri": f"data:{MIME.get(file.suffix, 'image/png')};base64,{data}"}
-    return {**doc, "images": imgs} if imgs else doc
+        file = images.image_file(doc, blob, path.parent, i).resolve()
+        files.append(file)
+        imgs[i] = {k: v for k, v in imgs[i].items() if k not in ("uri", "bufferView", "mimeType")} | {"uri": str(file)}
+    return material_document({**doc, "images": imgs} if imgs else doc, index, embedded=False), files
 
 
 def _maps(m: dict[str, Any], doc: dict[str, Any], blob: bytes | None, path: Path,

@@ -143,7 +143,7 @@ def read_mtlx_shader(shader, node_id: str, name: str, file: str) -> Entry:
     node in a document: its inputs copied into one (connections listed as textured, read at their
     defaults), then the reader's correspondence."""
     from brdfremap.adapters.materialx.mxlib import mx, standard_libraries
-    from brdfremap.adapters.materialx.reader import material_entry
+    from brdfremap.adapters.materialx.reader import material_entry, needs_document
 
     m = mx()
     lib = standard_libraries()
@@ -164,7 +164,8 @@ def read_mtlx_shader(shader, node_id: str, name: str, file: str) -> Entry:
             textured.append(f"{iname} <- {inp.GetConnectedSources()[0][0].source.GetPath()} (read at its default)")
         elif inp.Get() is not None:
             node.setInputValue(iname, _mx_value(m, inp.Get(), declared.getType()), declared.getType())
-    entry = material_entry(m, doc.addMaterialNode(doc.createValidChildName("usd_material"), node), file, name=name)
+    entry = needs_document(material_entry(m, doc.addMaterialNode(doc.createValidChildName("usd_material"), node), file,
+                                          name=name))
     return entry.model_copy(update={"notes": [*entry.notes, *notes], "textured": [*entry.textured, *textured]})
 
 

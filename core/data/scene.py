@@ -99,7 +99,9 @@ class EnvironmentLight(_Strict):
     type: Literal["environment"]
     map: str = Field("studio", description="'studio' (built in: key, fill and rim lights), 'constant' (radiance 1 "
                                            "everywhere), a built-in disc of light ('probe-disc', 'grazing-disc', "
-                                           "'rim-disc', 'headlight-disc': scale is its irradiance), "
+                                           "'rim-disc', 'headlight-disc': scale is its irradiance), a "
+                                           "built-in soft box over a backdrop ('probe-backdrop', 'grazing-backdrop', "
+                                           "'rim-backdrop', 'headlight-backdrop': likewise), "
                                            "or the path of an equirectangular EXR or HDR of linear "
                                            "radiance, twice as wide as high (relative to the scene file).")
     scale: float = Field(1.0, gt=0, le=1e6, description="Multiplies the map's radiance.")

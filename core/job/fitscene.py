@@ -29,7 +29,7 @@ from ..data.metrics import l2, relative_rmse
 from ..data.scene import MAX_SPP, EnvironmentLight, PointLight, ProbeScene, View
 from ..data.settings import FitScene as Policy
 from ..data.environment import DISC_RADIUS, SOFT_RADIUS
-from .validation import disc_for, place_light
+from .validation import backdrop_for, disc_for, place_light
 
 GOAL = 0.03
 """The source noise (relative RMSE between two seeds) a fit scene should reach."""
@@ -234,11 +234,10 @@ def _backdrop(render, scene: ProbeScene, noise: float, limit: float) -> FitScene
     over the backdrop (`core.data.environment.BACKDROPS`), where what is behind the sphere is seen through
     it, at the samples that bring the source's noise to GOAL; None where the scene's lights have no backdrop
     (more than one, or one in a direction none is built in) or it cannot resolve the source."""
-    discs = [disc_for(x, scene) for x in scene.point_lights]
-    if len(scene.lights) != 1 or None in discs:
+    lights = [backdrop_for(x, scene) for x in scene.point_lights]
+    if len(scene.lights) != 1 or None in lights:
         return None
-    light = discs[0].model_copy(update={"map": discs[0].map.removesuffix("-disc") + "-backdrop"})
-    found = _resolved(render, scene.model_copy(update={"lights": [light],
+    found = _resolved(render, scene.model_copy(update={"lights": lights,
                                                        "name": f"{scene.name}, its light over a backdrop"}), limit)
     if found is None:
         return None

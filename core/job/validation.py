@@ -88,12 +88,9 @@ def given_condition(scene: ProbeScene, transmissive: bool = False) -> Condition:
     lights = tuple(scene.view_scenes()[0].lights)
     given = Condition(Lighting.GIVEN, "scene as given", f"the job's scene ({scene.name}) with its own lights, which "
                       "the fit did not use", lights, given=True)
-    disc = disc_for(lights[0], scene) if transmissive and len(lights) == 1 and isinstance(lights[0], PointLight) \
-        else None
-    if disc is None:
-        return given
-    backdrop = disc.model_copy(update={"map": disc.map.removesuffix("-disc") + "-backdrop"})
-    return given.as_backdrop(backdrop)
+    backdrop = backdrop_for(lights[0], scene) if transmissive and len(lights) == 1 and \
+        isinstance(lights[0], PointLight) else None
+    return given if backdrop is None else given.as_backdrop(backdrop)
 
 
 DEFAULT = PointLight()
@@ -151,6 +148,16 @@ def disc_for(light: PointLight, scene: ProbeScene) -> EnvironmentLight | None:
         if float(np.dot(offset / dist, where.direction)) > np.cos(np.radians(0.5)):
             return EnvironmentLight(type="environment", map=name, scale=float(f"{light.intensity / dist ** 2:.6g}"))
     return None
+
+
+def backdrop_for(light: PointLight, scene: ProbeScene) -> EnvironmentLight | None:
+    """The built-in backdrop (`BACKDROPS`) in this point light's direction, its soft box at the light's irradiance
+    there; None where none is built in that direction."""
+    disc = disc_for(light, scene)
+    if disc is None:
+        return None
+    name = next(n for n, where in BACKDROPS.items() if where == DISCS[disc.map])
+    return disc.model_copy(update={"map": name})
 
 
 def _placed(light, scene: ProbeScene):

@@ -3,6 +3,7 @@ image-textured Principled BSDF are sources Cycles renders from the file (`Materi
 against that rendering; none is refused, none is flattened silently."""
 
 import json
+from pathlib import Path
 import subprocess
 import sys
 
@@ -255,7 +256,8 @@ def test_a_gltf_material_the_reading_does_not_carry_is_rendered_by_threejs_from_
     native = checker.material.native
     assert native.driven == ("base_color <- texture 0",) and not native.transmits
     doc = json.loads(native.element)
-    assert doc["extensionsUsed"] == ["KHR_texture_transform"] and doc["images"][0]["uri"].startswith("data:image/png")
+    assert doc["extensionsUsed"] == ["KHR_texture_transform"]
+    assert Path(doc["images"][0]["uri"]).is_file()  # its data URI written to the cache once, by content
     untiled = native.model_copy(update={"element": native.element.replace('"scale": [4, 4]', '"scale": [1, 1]')})
     scene = ProbeScene(resolution=128)
     with ThreeJsAdapter() as three:
@@ -343,3 +345,38 @@ def test_a_mixed_materialx_nodedef_renders_as_written_by_materialx(tmp_path):
         metal = mx.render("standard_surface", mx.models["standard_surface"].complete(
             {"metalness": 1.0, "specular_roughness": 0.2}), scene)
     assert np.allclose(img, 0.3 * metal + 0.7 * plastic, rtol=0.02, atol=1e-3)
+
+
+def test_gltf_as_written_is_the_material_at_its_index_with_every_texture_it_reads(tmp_path):
+    """Two materials of one name each keep their own material; an extension's texture (a volume's thickness) comes
+    along with its image, named by its file (embedded when rendered, not stored in every result)."""
+    from brdfremap.adapters.threejs.library import GltfReader
+
+    _tiled_gltf(tmp_path / "m.gltf")
+    doc = json.loads((tmp_path / "m.gltf").read_text())
+    doc["images"].append({"uri": "m.png"})
+    doc["textures"].append({"source": 1})
+    doc["materials"][1]["name"] = "tiled checker"  # a name twice
+    doc["materials"][1]["extensions"] = {"KHR_materials_volume": {"thicknessFactor": 0.5, "thicknessTexture": {"index": 1}}}
+    (tmp_path / "m.gltf").write_text(json.dumps(doc))
+    first, second = GltfReader().read(tmp_path / "m.gltf")
+    one, two = (json.loads(e.material.native.element) for e in (first, second))
+    assert "baseColorTexture" in one["materials"][0]["pbrMetallicRoughness"]
+    assert "baseColorTexture" not in two["materials"][0]["pbrMetallicRoughness"]
+    assert two["materials"][0]["extensions"]["KHR_materials_volume"]["thicknessTexture"] == {"index": 0}
+    assert two["images"] == [{"uri": str((tmp_path / "m.png").resolve())}]
+    assert first.material.native.sha256 != second.material.native.sha256
+
+
+def test_a_materialx_nodedef_input_left_unset_reads_its_default_and_a_bad_colour_space_is_that_material_only(tmp_path):
+    from brdfremap.adapters.materialx.reader import MaterialXReader
+
+    text = TWO_TONE.read_text()
+    unset = tmp_path / "unset.mtlx"
+    unset.write_text(text.replace('<input name="tint" type="color3" value="0.2, 0.3, 0.7" />', ""))
+    blue = MaterialXReader().read(unset)[0]
+    assert blue.material.params["base_color"] == (0.6, 0.1, 0.05) and not blue.textured  # the nodedef's default
+    bad = tmp_path / "bad.mtlx"
+    bad.write_text(text.replace('value="0.2, 0.3, 0.7"', 'value="0.2, 0.3, 0.7" colorspace="no_such_space"'))
+    blue, mixed = MaterialXReader().read(bad)
+    assert blue.material is None and "no_such_space" in blue.problem and mixed.material is not None
