@@ -45,7 +45,9 @@ def _card(item: "Item") -> dict:
         m = rep.metrics
         card["report"] = {
             "folder": folder, "images": [f"{folder}/{n}.png" for n in ("source", "target", "error")],
-            "before": {k: format_value(_tuple(v)) for k, v in rep.source.params.items()},
+            # A source with no reading has no values to show (its held `transmission` is not one of its file's).
+            "before": {k: format_value(_tuple(v)) for k, v in rep.source.params.items()}
+            if rep.source.model or rep.source.native is None else {},
             "after": {k: format_value(_tuple(v)) for k, v in rep.params.items()},
             "fitted": rep.fitted, "error": m.relative_rmse, "perceptual": m.perceptual, "noise": m.noise_floor,
             "threshold": m.threshold, "renders": rep.renders, "seconds": rep.seconds, "resumed": item.done.resumed,
