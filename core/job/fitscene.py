@@ -164,8 +164,9 @@ def choose_lights(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene,
         found = _discs(render, scene, noise, limit, why)
         if found is not None:
             return found
-    if transmissive and noise > GOAL and policy == Policy.AUTO and environment_ok and not scene.views \
-            and scene.environment is None:
+    if transmissive and policy == Policy.AUTO and environment_ok and not scene.views and scene.environment is None:
+        # However little its own noise (a real-time renderer's none): a target's glass is noisy under a point
+        # light, and what is behind a glass is black there; over the backdrop it is seen through it.
         found = _backdrop(render, scene, noise, limit)
         if found is not None:
             return found
@@ -242,7 +243,8 @@ def _backdrop(render, scene: ProbeScene, noise: float, limit: float) -> FitScene
     if found is None:
         return None
     lit, n = found
-    shown = f"{noise:.0%} noise at {scene.spp} spp" if math.isfinite(noise) else "black there"
+    shown = "black there" if not math.isfinite(noise) else f"{noise:.0%} noise at {scene.spp} spp" if noise > GOAL \
+        else "what is behind it black there"
     return FitScene(lit, f"light through the sphere, which a point light reaches by rare paths ({shown}): fitted "
                          f"with the light as a soft box {2 * SOFT_RADIUS:g} degrees across, where it is, over a "
                          f"backdrop seen through the sphere, at {lit.spp} spp ({n:.1%})",
