@@ -46,8 +46,8 @@ def _card(item: "Item") -> dict:
         card["report"] = {
             "folder": folder, "images": [f"{folder}/{n}.png" for n in ("source", "target", "error")],
             # A source with no reading has no values to show (its held `transmission` is not one of its file's).
-            "before": {k: format_value(_tuple(v)) for k, v in rep.source.params.items()}
-            if rep.source.model or rep.source.native is None else {},
+            "before": {} if src is not None and src.native is not None and not src.model else
+            {k: format_value(_tuple(v)) for k, v in rep.source.params.items()},
             "after": {k: format_value(_tuple(v)) for k, v in rep.params.items()},
             "fitted": rep.fitted, "error": m.relative_rmse, "perceptual": m.perceptual, "noise": m.noise_floor,
             "threshold": m.threshold, "renders": rep.renders, "seconds": rep.seconds, "resumed": item.done.resumed,
