@@ -24,3 +24,10 @@ def brdfremap_register_formats(register_reader, register_writer):
 
     register_reader(MitsubaXmlReader())
     register_writer(MitsubaLibraryWriter())
+
+
+@hookimpl
+def brdfremap_register_scene_writers(register):
+    from .probe_scene import MitsubaSceneWriter
+
+    register(MitsubaSceneWriter())

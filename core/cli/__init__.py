@@ -13,11 +13,11 @@ from ..data.errors import ConfigError, RemapError
 from ..run import interrupt
 
 EXIT_USAGE = 2
-COMMANDS = ("convert", "table", "render", "sweep", "roundtrip", "schema", "adapters", "check")
+COMMANDS = ("convert", "table", "render", "scene", "sweep", "roundtrip", "schema", "adapters", "check")
 
 
 def _dispatch(argv: list[str]) -> int:
-    from . import check_cmd, convert_cmd, experiment_cmd, remap_cmd, table_cmd, tools
+    from . import check_cmd, convert_cmd, experiment_cmd, remap_cmd, scene_cmd, table_cmd, tools
 
     handlers = {
         "adapters": lambda rest: tools.adapters(tools.adapters_parser().parse_args(rest)),
@@ -25,6 +25,7 @@ def _dispatch(argv: list[str]) -> int:
         "check": lambda rest: check_cmd.run(check_cmd.parser().parse_args(rest)),
         "render": lambda rest: tools.render(tools.render_parser().parse_args(rest)),
         "table": table_cmd.run,
+        "scene": lambda rest: scene_cmd.run(scene_cmd.parser().parse_args(rest)),
         "convert": lambda rest: convert_cmd.run(convert_cmd.parser().parse_args(rest)),
         **{kind: (lambda rest, kind=kind: experiment_cmd.run(kind, experiment_cmd.parser(kind).parse_args(rest)))
            for kind in ("sweep", "roundtrip")},

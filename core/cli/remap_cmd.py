@@ -41,7 +41,10 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--adapter", help="target adapter (see `remap adapters`), or a renderer definition file "
                                      "(renderer.yaml); required unless --table gives it")
     p.add_argument("--model", help="target material model of that adapter; required unless --table gives it")
-    p.add_argument("--source", required=True, metavar="MATERIAL.yaml", help="source material file")
+    given = p.add_mutually_exclusive_group(required=True)
+    given.add_argument("--source", metavar="MATERIAL.yaml", help="source material file")
+    given.add_argument("--source-images", metavar="DIR", help="a source given as images: the scenes of `remap scene "
+                                                              "export` rendered elsewhere (DIR/renders/MATERIAL)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     p.add_argument("--table", metavar="TABLE", help="read the target's parameters from a remap table (`remap table "
                                                     "build`) instead of fitting them: rendered and judged, or not "
@@ -58,6 +61,22 @@ def parser() -> argparse.ArgumentParser:
     options.add_settings(p)
     options.add_common(p)
     return p
+
+
+def images_source(folder: str):
+    """A source given as images (`core.images.folder`): its calibration checked first, each failure one line."""
+    from ..data.schemas import Material
+    from ..images.calibrate import checked
+
+    images = checked(folder)
+    return Material(adapter="images", model="", name=images.folder.name, native=images.native())
+
+
+def images_scene(folder: str):
+    """The job's scene of a source given as images: the export's probe shot."""
+    from ..images.folder import ImageFolder
+
+    return ImageFolder.open(folder).manifest.shot("probe").scene
 
 
 def run(args: argparse.Namespace) -> int:
@@ -79,8 +98,9 @@ def run(args: argparse.Namespace) -> int:
     from ..run.store import Store, owned
     from .progress import RenderProgress
 
-    source = load_material(args.source)
-    scene = options.scene_from(args)
+    source = load_material(args.source) if args.source else images_source(args.source_images)
+    label = args.source or args.source_images
+    scene = options.scene_from(args, images_scene(args.source_images) if args.source_images else None)
     settings = options.settings_from(args)
     registry = collect_adapters()
     adapter = registry.resolve(args.adapter)
@@ -92,15 +112,15 @@ def run(args: argparse.Namespace) -> int:
             raise ConfigError("given twice: keep one", field=f"--fix {name}")
         fixed[name] = value
     job = Job(source=source, target=Target(adapter=adapter, model=args.model, fix=fixed), scene=scene,
-              settings=settings, label=str(args.source), fit_same_model=args.fit_same_model)
-    resolved = resolve(job, registry, Where(source_file=str(args.source)))
+              settings=settings, label=str(label), fit_same_model=args.fit_same_model)
+    resolved = resolve(job, registry, Where(source_file=str(label)))
     header = (f"remap {source.adapter}:{source.model} -> {adapter}:{args.model}  ({scene.resolution}x"
               f"{scene.resolution}, {scene.spp} spp, scheme {settings.scheme}; fitting by default "
               f"{', '.join(resolved.free) or 'nothing'}{_carried_note(resolved.target_spec)})")
     with owned(args.out) as folder, workers() as w, adapter_pool(registry) as adapters:
         runner = Runner(Store(folder), w, adapters, quiet=True, render_progress=RenderProgress(not args.quiet, header),
                         reuse=not args.force)
-        (done,) = runner.run([Task("", resolved, str(args.source))])
+        (done,) = runner.run([Task("", resolved, str(label))])
     if done.redone and not args.quiet:
         print(f"note: the result that was in {folder} was replaced: {done.redone}", file=sys.stderr)
     print_report(done.report, folder, resumed=done.resumed)

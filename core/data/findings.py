@@ -329,6 +329,46 @@ class ValidationSkipped(_Note):
         return f"held-out condition {self.condition} not checked: {self.why}"
 
 
+class Unrendered(str):
+    """Why a held-out condition has no source image: it was not given (a source of images without that
+    shot, `core.images.folder`). A condition skipped for it is unchecked (`NotGiven`), not a note."""
+
+
+class _Unchecked(_Finding):
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def severity(self) -> Severity:
+        return Severity.UNCHECKED
+
+
+class NotGiven(_Unchecked):
+    kind: Literal["not_given"] = "not_given"
+    condition: Lighting
+    why: str
+
+    def sentence(self) -> str:
+        return f"held-out condition {self.condition} unchecked: the source {self.why}"
+
+
+class Uncalibrated(_Unchecked):
+    kind: Literal["uncalibrated"] = "uncalibrated"
+    folder: str
+
+    def sentence(self) -> str:
+        return (f"the source's renderer is uncalibrated: no images of the export's white Lambertian beside {self.folder} "
+                "(renders/calibration), so its units, orientation and encoding are unchecked and the renderers' "
+                "own difference is not measured")
+
+
+class NoiseUnmeasured(_Note):
+    kind: Literal["noise_unmeasured"] = "noise_unmeasured"
+    shots: list[str]
+
+    def sentence(self) -> str:
+        return (f"the source's render noise is not measured where one seed was given ({', '.join(self.shots)}): "
+                "the noise floors there count the target's alone, so errors are judged stricter")
+
+
 class NothingFitted(_Note):
     kind: Literal["nothing_fitted"] = "nothing_fitted"
 
@@ -507,7 +547,7 @@ FINDINGS = (ErrorAboveThreshold, ModelMismatch, TableMismatch, HeldOutAbove, Ren
             PinnedOnBound, RendererAlters, ValidationSkipped, NothingFitted, TableLookup, TexturedAbove, TexturedNotes,
             StartKept, ChoiceTried, SmoothHeld, SchemeChosen, DeadParameters,
             JointRefined, PredictionNotRealised, NoisePolished, InputsTried, Approximated, SameMaterial,
-            UniformTarget)
+            UniformTarget, NotGiven, Uncalibrated, NoiseUnmeasured)
 Finding = Annotated[Union[FINDINGS], Field(discriminator="kind")]
 
 FindingKind = StrEnum("FindingKind", {c.model_fields["kind"].default.upper(): c.model_fields["kind"].default

@@ -9,6 +9,8 @@ from dataclasses import dataclass, field
 from ..data.scene import Lighting
 from ..data.findings import (
     CannotResolve,
+    NotGiven,
+    Unrendered,
     DeadParameters,
     ErrorAboveThreshold,
     HeldOutAbove,
@@ -164,7 +166,8 @@ def judge(ev: Evidence, notes: list) -> Verdict:
         errors = [TableMismatch(error=ev.error, expected=lookup.expected_error, threshold=ev.threshold)
                   if p is scene[0] else p for p in errors]
     problems = errors + fit + [RendererAlters(detail=n) for n in ev.renderer_notes]
-    extra: list = [ValidationSkipped(condition=k, why=v) for k, v in ev.validation.skipped.items()]
+    extra: list = [NotGiven(condition=k, why=v) if isinstance(v, Unrendered) else ValidationSkipped(condition=k, why=v)
+                   for k, v in ev.validation.skipped.items()]
     extra += [Approximated(side=side, detail=what) for side, what in ev.approximated]
     if ev.agreement.unchecked:
         extra.append(TransportUnchecked(why=ev.agreement.unchecked))

@@ -45,3 +45,18 @@ def brdfremap_register_formats(register_reader, register_writer):
     ``brdfremap.core.library.formats``) and ``register_writer(writer)`` for each native library
     it writes (``name``, ``adapter``, ``models``, ``write(folder, items) -> list[Path]``). A
     reader must not run any program a file names, and must name the file in its errors."""
+
+
+@hookspec
+def brdfremap_register_scene_writers(register):
+    """Register writers of the probe scene in a renderer's own format (`remap scene export`), for users
+    who render it themselves (a renderer the tool cannot drive: `core.images`).
+
+    Call ``register(writer)`` once per format: an object with ``name`` (the format, e.g. ``usd``; its
+    files go to a folder of that name), ``suffix`` (``.usda``) and
+    ``write(scene, path, maps) -> list[Path]``: one single-view ``ProbeScene`` (camera, sphere, lights in
+    the scene's physical units, black background) written to ``path`` with the white Lambertian of albedo
+    0.8 on the sphere, which a user swaps for their material (the sheet says how: ``material`` names it
+    in the file); ``maps`` gives each environment light's map (its ``map`` field) as the path of an
+    equirectangular EXR in the project's convention (`core.data.environment`) with its scale and rotation
+    applied, which the file names relative to itself. Returns every file written."""

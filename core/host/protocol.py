@@ -52,6 +52,9 @@ class Adapter(abc.ABC):
     native_lobes: ClassVar[bool] = False
     """Whether `render_native` renders the lobes of any material apart (Cycles' render passes); else a
     source rendered as written is fitted in one stage."""
+    fixed_scenes: ClassVar[bool] = False
+    """Whether it renders only the scenes it was given (a source of images: `core.images`): its fit runs on
+    the job's scene as given, and a held-out condition it has no image of is unchecked."""
     calibration: ClassVar[tuple[str, dict] | None] = None
     """A white diffuse material of albedo 0.8 (model, params), which `remap check` renders against
     the analytic radiance; None: the adapter has none to offer."""
@@ -121,6 +124,17 @@ class Adapter(abc.ABC):
         separates lobes of any material (render passes), else a RenderError. Only for an adapter whose
         ``natives`` is true."""
         raise RenderError(f"adapter {self.name!r} does not render a material from its own file")
+
+    def for_native(self, native: Native) -> "Adapter":
+        """This adapter as it renders one material of its own file (``native``): itself, or one that
+        answers for that material alone (a source of images: its shots decide which scenes it renders,
+        its folder's calibration images are its white Lambertian)."""
+        return self
+
+    def native_findings(self) -> list:
+        """What a result must say of the material this adapter renders (`for_native`): a source of images
+        uncalibrated, or its noise estimated. Findings of `core.data.findings`."""
+        return []
 
     def candidates(self) -> "list[ModelChoice]":
         """The models a material with no reading is fitted to when the user names only this adapter

@@ -33,7 +33,7 @@ from ..host.plugins import AdapterRegistry, collect_adapters
 from ..host.model import Model
 from ..host.protocol import Adapter
 from ..engine.results import EngineResult
-from .fitscene import FitScene as Chosen, choose as choose_scene
+from .fitscene import FitScene as Chosen, as_given as given_scene, choose as choose_scene
 from .job import Job, Resolved
 from .renders import CachedRenderer, ProbeRenders
 from .report import FileRecord, Report, build_report
@@ -146,15 +146,17 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
     job = resolved.job
     src, tgt = job.source, job.target
     ledger = Ledger()
-    src_adapter, tgt_adapter = Metered(adapters[src.adapter], "source", ledger), Metered(adapters[tgt.adapter],
-                                                                                          "target", ledger)
+    own = adapters[src.adapter] if src.native is None else adapters[src.adapter].for_native(src.native)
+    src_adapter, tgt_adapter = Metered(own, "source", ledger), Metered(adapters[tgt.adapter], "target", ledger)
     source = CachedRenderer.source(src_adapter, src.adapter, resolved.source_spec, job.scene, src.native)
     target = CachedRenderer(tgt_adapter, tgt.adapter, resolved.target_spec, job.scene)
     if progress:
         progress("source", 0, float("nan"))
     env_ok = all(LightType.ENVIRONMENT in adapters[n].light_types for n in (src.adapter, tgt.adapter))
     with purpose("fit scene"):
-        fit = choose_scene(lambda sc: source(resolved.source_params, scene=sc), job.scene, env_ok,
+        fit = given_scene(lambda sc: source(resolved.source_params, scene=sc), job.scene,
+                          lambda sc: own.scene_problem(sc) is None) if own.fixed_scenes else \
+            choose_scene(lambda sc: source(resolved.source_params, scene=sc), job.scene, env_ok,
                            job.settings.resolve_limit, fit_policy(job),
                            smooth=resolved.source_spec.is_smooth(resolved.source_params) or resolved.target_spec.smooth,
                            transmissive=resolved.source_transmits,
@@ -174,7 +176,8 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
     notes = lookup_notes(job) + (textured_findings(texturing.record, job.settings.threshold,
                                                    job.settings.resolve_limit) if texturing else []) + \
         ([SmoothHeld(held=smooth)] if smooth else []) + \
-        ([UniformTarget(driven=list(src.native.driven))] if src.native is not None and src.native.driven else [])
+        ([UniformTarget(driven=list(src.native.driven))] if src.native is not None and src.native.driven else []) + \
+        own.native_findings()
     result = remap(resolved.target_spec, {**resolved.base, **start}, free, renders, job.settings, job.tuning,
                    progress, alternatives=alternatives(resolved, start, smooth) if informed else [], notes=notes,
                    needed=needed(resolved, start) if free and job.settings.inputs == Inputs.NEEDED else {})

@@ -109,6 +109,26 @@ BACK_WEIGHT = 0.25
 there is scaled to this fraction of the first view's (squared norm)."""
 
 
+def back_light(scene: ProbeScene) -> PointLight:
+    """The back light of a fit's second view (`BACK`), placed about this scene's sphere, on the side opposite
+    its first point light, at that light's intensity (`with_back_light` scales it to the source)."""
+    first = next(iter(scene.point_lights), None)
+    return place_light(BACK.model_copy(update={"phi": (first.phi + 180.0) % 360.0}) if first else BACK, scene)
+
+
+def as_given(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene,
+             renders: Callable[[ProbeScene], bool]) -> FitScene:
+    """The fit scene of a source that renders only the scenes it was given (images: `core.images`): the
+    job's scene, with the back light's view where the source renders it (``renders(scene)``) and it
+    resolves the source as `with_back_light` asks."""
+    noise = source_noise(render, scene)
+    found = FitScene(scene, noise=noise, scene_noise=noise)
+    back = scene.model_copy(update={"lights": [back_light(scene)]})
+    if scene.views or scene.environment is not None or not renders(back) or not noise <= GOAL:
+        return found
+    return with_back_light(render, found)
+
+
 def with_back_light(render: Callable[[ProbeScene], np.ndarray], found: FitScene,
                     weight: float = BACK_WEIGHT) -> FitScene:
     """``found`` with a second view under `BACK`, placed as the held-out lights are (at the distance of
@@ -118,8 +138,7 @@ def with_back_light(render: Callable[[ProbeScene], np.ndarray], found: FitScene,
     outweigh the front). Left out where the source is black from behind, or where its noise over
     both views exceeds `GOAL` and the first view's own (a sharp grazing highlight)."""
     scene = found.scene
-    first = next(iter(scene.point_lights), None)
-    light = place_light(BACK.model_copy(update={"phi": (first.phi + 180.0) % 360.0}) if first else BACK, scene)
+    light = back_light(scene)
     back = scene.model_copy(update={"lights": [light]})
     front_norm, back_norm = (l2(render(sc)) for sc in (scene, back))
     if back_norm <= 0.0 or front_norm <= 0.0 or np.sqrt(weight) * front_norm / back_norm > MAX_SCALE:
