@@ -229,8 +229,8 @@ class ProbeRenders:
         def problems(scene: ProbeScene) -> str | None:
             for side in (self.source, self.target):
                 why = side.adapter.scene_problem(scene)
-                if why:
-                    return f"adapter {side.name!r} {why}"
+                if why:  # of its type (`core.data.findings.Unrendered`: the condition is then unchecked)
+                    return type(why)(f"adapter {side.name!r} {why}")
             return None
 
         # Held-out lights take the job's scene (its camera, size and samples), not a fit scene made

@@ -1,0 +1,129 @@
+"""A renderer nobody can script: the probe scene exported (`remap scene export`), rendered outside the
+tool (Mitsuba loading the exported XML in a process that does not import brdf-remap), and its images
+remapped as a source (`remap --source-images`): calibration checked first, each corruption named in one
+line, each condition not given named unchecked."""
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from brdfremap.core.cli import main
+from conftest import need_adapter
+from helpers import ROOT
+
+RENDER = ROOT / "examples" / "outside" / "render_mitsuba.py"
+GOLD = ('<scene version="3.0.0"><bsdf type="roughconductor" id="material"><string name="material" value="Au"/>'
+        '<string name="distribution" value="ggx"/><float name="alpha" value="0.2"/></bsdf></scene>')
+
+
+def _outside(scenes: Path, out: Path, *extra: str) -> None:
+    """Mitsuba renders the exported scenes in a process of its own (the script imports no brdf-remap)."""
+    done = subprocess.run([sys.executable, str(RENDER), str(scenes), str(out), *extra], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-2000:]
+
+
+@pytest.fixture(scope="module")
+def export(tmp_path_factory):
+    from brdfremap.adapters.mitsuba.adapter import MitsubaAdapter
+
+    need_adapter(MitsubaAdapter)
+    folder = tmp_path_factory.mktemp("export")
+    assert main(["scene", "export", str(folder), "--format", "mitsuba", "--resolution", "48", "--spp", "64"]) == 0
+    _outside(folder / "mitsuba", folder / "renders" / "calibration")
+    (folder / "gold.xml").write_text(GOLD)
+    _outside(folder / "mitsuba", folder / "renders" / "gold", "--material", str(folder / "gold.xml"))
+    return folder
+
+
+def test_the_export_holds_every_shot_in_each_format_with_its_sheet(export):
+    manifest = json.loads((export / "scenes.json").read_text())
+    names = [s["name"] for s in manifest["shots"]]
+    assert names == ["probe", "grazing", "rim", "headlight", "environment", "back", "bright"]
+    for name in names:
+        assert (export / manifest["files"]["mitsuba"][name]).is_file()
+    assert (export / "maps" / "studio.exr").is_file() and (export / "mitsuba" / "material.xml").is_file()
+    sheet = (export / "SHEET.md").read_text()
+    assert "probe.seed0.exr" in sheet and "48 x 48" in sheet and "64 samples per pixel" in sheet
+    assert sorted(p.name for p in (export / "renders" / "gold").iterdir()) == sorted(
+        f"{n}.seed{s}.exr" for n in names if n != "bright" for s in (0, 1))
+
+
+def test_mitsubas_images_of_the_exported_calibration_pass_every_row(export):
+    from brdfremap.core.images.calibrate import calibration_rows
+    from brdfremap.core.images.folder import ImageFolder
+
+    gold = ImageFolder.open(export / "renders" / "gold")
+    rows = calibration_rows(gold.calibration, gold)
+    assert [r.name for r in rows if not r.passed] == []
+    assert {"units", "orientation", "precision", "light rim", "light grazing"} <= {r.name for r in rows}
+
+
+def _corrupted(export: Path, tmp_path: Path, change) -> Path:
+    """A copy of the renders whose calibration images are changed by ``change(name, pixels)``."""
+    from brdfremap.core.data.imageio import read_image, write_exr
+
+    copy = tmp_path / "export"
+    shutil.copytree(export, copy)
+    for f in (copy / "renders" / "calibration").glob("*.exr"):
+        write_exr(f, change(f.name, read_image(f)))
+    return copy / "renders" / "gold"
+
+
+def _srgb(x):
+    x = np.clip(x, 0, None)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055).astype(np.float32)
+
+
+CORRUPTIONS = {
+    "flipped": (lambda n, a: a[:, ::-1].copy(), "orientation: probe: the image is mirrored left-right"),
+    "one row shifted": (lambda n, a: np.roll(a, 1, axis=0), "orientation: probe: the image is shifted one row down"),
+    "gamma-encoded": (lambda n, a: _srgb(a), "encoding: probe: the pixels go as the radiance to the power 0."),
+    "clipped": (lambda n, a: np.minimum(a, 1.0), "precision: "),
+    "exposed x2": (lambda n, a: a * 2, "(a factor of 2)"),
+}
+
+
+@pytest.mark.parametrize("name", list(CORRUPTIONS))
+def test_each_corrupted_calibration_is_named_in_one_line_and_nothing_is_fitted(export, tmp_path, capsys, name):
+    change, said = CORRUPTIONS[name]
+    gold = _corrupted(export, tmp_path, change)
+    code = main(["--source-images", str(gold), "--adapter", "mitsuba", "--model", "roughconductor",
+                 "--out", str(tmp_path / "out"), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2 and "not fitted" in err and said in err, err
+    assert not (tmp_path / "out" / "result.json").exists()
+    assert "Traceback" not in err
+
+
+def _remap(gold: Path, out: Path) -> dict:
+    assert main(["--source-images", str(gold), "--adapter", "mitsuba", "--model", "roughconductor", "--fix",
+                 "distribution=ggx", "--out", str(out), "--quiet"]) == 0
+    return json.loads((out / "result.json").read_text())
+
+
+def test_gold_from_its_images_alone_is_remapped_and_judged_under_every_condition_given(export, tmp_path):
+    report = _remap(export / "renders" / "gold", tmp_path / "out")
+    assert report["verdict"] == "ok", report["reason"]
+    assert abs(report["params"]["alpha"] - 0.2) < 0.02
+    checked = {c["condition"] for c in report["validation"]}
+    assert checked == {"grazing", "rim", "headlight", "environment"}
+
+
+def test_a_source_given_under_the_probe_alone_names_every_held_out_condition_unchecked(export, tmp_path):
+    folder = tmp_path / "export"
+    shutil.copytree(export, folder)
+    gold = folder / "renders" / "gold"
+    for f in gold.glob("*.exr"):
+        if not f.name.startswith(("probe.", "back.")):
+            f.unlink()
+    shutil.rmtree(folder / "renders" / "calibration")
+    report = _remap(gold, tmp_path / "out")
+    kinds = [f["kind"] for f in report["findings"]]
+    assert report["verdict"] == "unchecked", report["reason"]
+    assert sorted(f["condition"] for f in report["findings"] if f["kind"] == "not_given") == \
+        ["environment", "grazing", "headlight", "rim"]
+    assert "uncalibrated" in kinds
