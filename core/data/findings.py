@@ -13,6 +13,7 @@ from pydantic import Field, computed_field
 
 from .model import Strict, WithDerived
 from .scene import Lighting
+from .schemas import Value, format_value
 from .settings import Scheme
 
 class Severity(StrEnum):
@@ -369,6 +370,34 @@ class NoiseUnmeasured(_Note):
                 "the noise floors there count the target's alone, so errors are judged stricter")
 
 
+class Underdetermined(_Finding):
+    """Parameters within the noise of the fit's that look otherwise under a held-out condition: what was fitted
+    does not determine the material there."""
+
+    kind: Literal["underdetermined"] = "underdetermined"
+    condition: Lighting
+    label: str
+    difference: float = Field(description="Relative RMSE between the target at the fit's parameters and at the "
+                                          "other's, under that condition.")
+    other: dict[str, Value] = Field(description="The other parameters' values that differ from the fit's.")
+    fitted: dict[str, Value] = Field(description="The fit's values of those parameters.")
+    error: float = Field(description="The other parameters' error on the fit scene.")
+    checked: bool = Field(description="Whether the source was judged under that condition (then the check decides).")
+
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def severity(self) -> Severity:
+        return Severity.NOTE if self.checked else Severity.UNRELIABLE
+
+    def sentence(self) -> str:
+        moved = ", ".join(f"{k} {format_value(self.fitted[k])} -> {format_value(v)}" for k, v in self.other.items())
+        where = "where the source was judged, which decides" if self.checked else \
+            "which the source was not judged under: what was fitted does not determine the material there (give " \
+            "that condition's images, or judge the result under it yourself)"
+        return (f"underdetermined: other parameters within the fit's noise ({moved}; {self.error:.2%} on the fit "
+                f"scene) look {self.difference:.1%} different under the {self.label}, {where}")
+
+
 class NothingFitted(_Note):
     kind: Literal["nothing_fitted"] = "nothing_fitted"
 
@@ -547,7 +576,7 @@ FINDINGS = (ErrorAboveThreshold, ModelMismatch, TableMismatch, HeldOutAbove, Ren
             PinnedOnBound, RendererAlters, ValidationSkipped, NothingFitted, TableLookup, TexturedAbove, TexturedNotes,
             StartKept, ChoiceTried, SmoothHeld, SchemeChosen, DeadParameters,
             JointRefined, PredictionNotRealised, NoisePolished, InputsTried, Approximated, SameMaterial,
-            UniformTarget, NotGiven, Uncalibrated, NoiseUnmeasured)
+            UniformTarget, NotGiven, Uncalibrated, NoiseUnmeasured, Underdetermined)
 Finding = Annotated[Union[FINDINGS], Field(discriminator="kind")]
 
 FindingKind = StrEnum("FindingKind", {c.model_fields["kind"].default.upper(): c.model_fields["kind"].default

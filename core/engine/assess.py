@@ -31,6 +31,27 @@ class Pin:
 
 
 @dataclass(frozen=True)
+class Weakest:
+    """The direction in parameter space the fit's image pins least (the Jacobian's smallest singular value):
+    along it the parameters move furthest for a given rise of the error."""
+
+    space: ParamSpace
+    u: np.ndarray
+    v: np.ndarray
+    gain: float
+    """How fast the error rises along it: |J v| (relative RMSE per unit step in [0, 1]^n)."""
+
+    def step(self, rise: float) -> float:
+        """The step along it that raises the error by ``rise`` in quadrature, to first order (at a minimum the
+        residual is orthogonal to J's columns)."""
+        return rise / max(self.gain, 1e-12)
+
+    def at(self, t: float) -> dict[str, Value]:
+        """The parameters ``t`` along it from the fit's (either side by its sign), held within the bounds."""
+        return self.space.decode(np.clip(self.u + t * self.v, 0.0, 1.0))
+
+
+@dataclass(frozen=True)
 class Assessment:
     condition: float | None
     no_effect: bool
@@ -38,6 +59,7 @@ class Assessment:
     predicted: float | None = None
     """What a joint step predicts, when that is a gain worth a joint round; else None."""
     pins: list[Pin] = field(default_factory=list)
+    weakest: Weakest | None = None
 
 
 @dataclass(frozen=True)
@@ -68,7 +90,16 @@ def assess(target: ModelSpec, params: dict[str, Value], free: list[str], level: 
         cond = float(s[0] / s[-1]) if s[-1] > 0 else math.inf
     return Assessment(condition=cond, no_effect=not live.any(), dead=dead,
                       predicted=_joint_gain(chk, tuning, good_enough),
-                      pins=_pins(target, params, chk, labels, col))
+                      pins=_pins(target, params, chk, labels, col), weakest=_weakest(chk, live))
+
+
+def _weakest(chk: _Check, live: np.ndarray) -> Weakest | None:
+    if not live.any():
+        return None
+    _, s, vt = np.linalg.svd(chk.J[:, live], full_matrices=False)
+    v = np.zeros(chk.J.shape[1])
+    v[live] = vt[-1]
+    return Weakest(chk.space, chk.u, v, float(s[-1]))
 
 
 def _jacobian_at(target, params, free, level: Level, tuning: Tuning, tally: Tally, updates: int,

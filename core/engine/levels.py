@@ -80,6 +80,12 @@ class Renders(Protocol):
         ``params``) under the fit scene and the
         held-out conditions ``judged(condition)`` says the verdict judges (`core.job.agreement`)."""
 
+    def held_out(self) -> list[tuple[str, str, ProbeScene]]:
+        """Every held-out condition the target renders, judged or not: (name, label, one scene)."""
+
+    def target_at(self, params: dict[str, Value], scene: ProbeScene) -> np.ndarray:
+        """The target with ``params`` at ``scene`` (cached)."""
+
     def notes(self, params: dict[str, Value]) -> list[str]:
         """What the target renderer does to these values that the image cannot show (a trim)."""
 

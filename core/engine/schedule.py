@@ -20,6 +20,7 @@ from ..data.metrics import delta_e_itp, l2, relative_rmse
 from ..data.schemas import ModelSpec, Value
 from ..data.settings import Scheme, Settings
 from ..data.settings import Validation as ValidationPolicy
+from .underdetermined import underdetermined
 from .assess import Assessment, assess
 from .levels import Level, ProgressFn, Renders
 from .plan import Plan, PlannedStage, plan_stages
@@ -402,6 +403,11 @@ def _conclude(run: _Run, plan: Plan, state: _State, assessment: Assessment, join
     judged = {Lighting.SCENE: floor <= limit, **{c.condition: c.noise_floor <= limit for c in validation.checks}}
     with purpose("agreement"):
         agreement = run.renders.agreement(state.params, validation, run.threshold, lambda c: judged.get(c, False))
+    with purpose("validation"):
+        under = underdetermined(run.renders, run.scene, state.params, state.err, assessment.weakest, validation, floor,
+                                run.threshold)
+    if under is not None:
+        run.notes.append(under)
     evidence = Evidence(error=state.err, noise_floor=floor, threshold=run.threshold,
                         resolve_limit=run.settings.resolve_limit, assessment=assessment, stages=run.stages,
                         cond_limit=run.tuning.cond_limit, renderer_notes=run.renders.notes(state.params),

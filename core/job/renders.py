@@ -23,7 +23,7 @@ from ..engine.schedule import highlight_pixels
 from ..host.protocol import Adapter, check_image, plugin_call
 from .agreement import agreement, reference_kind
 from .cache import RenderCache, render_key
-from .validation import point_resolution, validate
+from .validation import held_out_scenes, point_resolution, validate
 
 
 def _round(v: Value) -> Value:
@@ -240,6 +240,16 @@ class ProbeRenders:
                         given_noise=self.given_noise, fit_lights=self.scene.view_scenes()[0].lights,
                         resolution=self.point_resolution(), resolve_limit=self.resolve_limit, sharp=self.sharp,
                         transmissive=self.transmits)
+
+    def held_out(self) -> list[tuple[str, str, ProbeScene]]:
+        """Every held-out condition of this job (`core.job.validation.held_out_scenes`) the target renders:
+        (name, label, its first scene)."""
+        found = held_out_scenes(self.job_scene, self.other_lights, self.scene.view_scenes()[0].lights,
+                                self.point_resolution(), self.sharp, self.transmits)
+        return [(c.name, c.label, a) for c, a, _ in found if not self.target.adapter.scene_problem(a)]
+
+    def target_at(self, params: dict[str, Value], scene: ProbeScene) -> np.ndarray:
+        return self.target(params, scene=scene)
 
     def point_resolution(self) -> int:
         """The frontal point-light conditions' resolution, from the source's highlight (its specular
