@@ -40,13 +40,15 @@ def run(args: argparse.Namespace) -> int:
     from ..run.executors import workers
     from ..library.convert import Destination, convert
     from ..library.formats import collect_formats, expand_inputs, read_all
+    from ..images.reader import images_scene
     from ..host.plugins import collect_adapters, get_plugin_manager
 
     pm = get_plugin_manager()
     registry, formats = collect_adapters(pm), collect_formats(pm)
     dest = Destination.parse(args.to, registry)
-    scene, settings = options.scene_from(args), options.settings_from(args)
-    entries = read_all(expand_inputs(args.inputs, formats), formats, keep_going=True)
+    inputs = expand_inputs(args.inputs, formats)
+    scene, settings = options.scene_from(args, images_scene(inputs)), options.settings_from(args)
+    entries = read_all(inputs, formats, keep_going=True)
     if args.only:
         missing = set(args.only) - {e.name for e in entries}
         if missing:

@@ -14,6 +14,7 @@ from typing import Any, Protocol
 from ..data.errors import ConfigError
 from .entries import Converted, Entry, Reader
 from .yaml_reader import YamlReader
+from ..images.reader import ImagesReader, image_folders
 from ..data.schemas import ParamKind
 
 __all__ = ["Converted", "Entry", "Reader", "Writer", "Formats", "collect_formats", "expand_inputs", "read_all",
@@ -48,7 +49,7 @@ class Formats:
 
     @property
     def suffixes(self) -> set[str]:
-        return {s for r in self.readers for s in r.suffixes}
+        return {s for r in self.readers for s in r.suffixes if s}  # "": a folder (of images)
 
 
 def collect_formats(pm=None) -> Formats:
@@ -56,7 +57,7 @@ def collect_formats(pm=None) -> Formats:
     from ..host.plugins import get_plugin_manager
 
     pm = pm or get_plugin_manager()
-    formats = Formats(readers=[YamlReader()])
+    formats = Formats(readers=[YamlReader(), ImagesReader()])
     for impl in pm.hook.brdfremap_register_formats.get_hookimpls():
         try:
             impl.function(register_reader=formats.readers.append, register_writer=formats.writers.append)
@@ -73,7 +74,9 @@ def expand_inputs(paths: list[str], formats: Formats) -> list[Path]:
         p = Path(text)
         if not p.exists():
             raise ConfigError("not found (check the path)", file=text)
-        if p.is_dir():
+        if p.is_dir() and image_folders(p):  # one material's images, or the folders of several
+            out += image_folders(p)
+        elif p.is_dir():
             found = sorted(f for f in p.iterdir() if f.is_file() and f.suffix.lower() in formats.suffixes
                            and formats.reader_for(f).accepts(f))
             if not found:

@@ -16,6 +16,8 @@ from conftest import need_adapter
 from helpers import ROOT
 
 RENDER = ROOT / "examples" / "outside" / "render_mitsuba.py"
+ROUGH = ('<scene version="3.0.0"><bsdf type="roughplastic" id="material"><rgb name="diffuse_reflectance" '
+         'value="0.8, 0.8, 0.8"/><float name="alpha" value="0.5"/><string name="distribution" value="ggx"/></bsdf></scene>')
 GOLD = ('<scene version="3.0.0"><bsdf type="roughconductor" id="material"><string name="material" value="Au"/>'
         '<string name="distribution" value="ggx"/><float name="alpha" value="0.2"/></bsdf></scene>')
 
@@ -36,6 +38,8 @@ def export(tmp_path_factory):
     _outside(folder / "mitsuba", folder / "renders" / "calibration")
     (folder / "gold.xml").write_text(GOLD)
     _outside(folder / "mitsuba", folder / "renders" / "gold", "--material", str(folder / "gold.xml"))
+    (folder / "rough.xml").write_text(ROUGH)
+    _outside(folder / "mitsuba", folder / "renders" / "rough", "--material", str(folder / "rough.xml"), "--shot", "probe")
     return folder
 
 
@@ -48,6 +52,7 @@ def test_the_export_holds_every_shot_in_each_format_with_its_sheet(export):
     assert (export / "maps" / "studio.exr").is_file() and (export / "mitsuba" / "material.xml").is_file()
     sheet = (export / "SHEET.md").read_text()
     assert "probe.seed0.exr" in sheet and "48 x 48" in sheet and "64 samples per pixel" in sheet
+    assert sorted(p.name for p in (export / "renders" / "rough").iterdir()) == ["probe.seed0.exr", "probe.seed1.exr"]
     assert sorted(p.name for p in (export / "renders" / "gold").iterdir()) == sorted(
         f"{n}.seed{s}.exr" for n in names if n != "bright" for s in (0, 1))
 
@@ -127,3 +132,24 @@ def test_a_source_given_under_the_probe_alone_names_every_held_out_condition_unc
     assert sorted(f["condition"] for f in report["findings"] if f["kind"] == "not_given") == \
         ["environment", "grazing", "headlight", "rim"]
     assert "uncalibrated" in kinds
+
+
+def test_a_rough_plastic_given_under_the_probe_alone_is_underdetermined_where_fits_part_under_the_rim(export, tmp_path):
+    """Diffuse albedo, roughness and IOR trade off under the probe (a highlight over a bright diffuse lobe):
+    parameters within the fit's noise part under the rim light, which no image was given of."""
+    assert main(["--source-images", str(export / "renders" / "rough"), "--adapter", "mitsuba", "--model",
+                 "roughplastic", "--fix", "distribution=ggx", "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    report = json.loads((tmp_path / "out" / "result.json").read_text())
+    (found,) = [f for f in report["findings"] if f["kind"] == "underdetermined"]
+    assert report["verdict"] == "unreliable" and found["severity"] == "unreliable" and not found["checked"]
+    assert found["difference"] > 0.05 and found["condition"] in ("rim", "grazing", "headlight", "environment")
+    assert found["error"] <= report["metrics"]["relative_rmse"] + 1.5 * report["metrics"]["noise_floor"] + 1e-9
+    assert "int_ior" in found["other"] or "alpha" in found["other"]
+
+
+def test_remap_convert_takes_the_exports_renders_folder_one_material_a_folder(export, tmp_path):
+    out = tmp_path / "lib"
+    assert main(["convert", str(export / "renders" / "gold"), "--to", "mitsuba:roughconductor", "--out", str(out),
+                 "--quiet"]) == 0
+    (item,) = json.loads((out / "convert.json").read_text())["materials"]
+    assert item["name"] == "gold" and item["status"] == "ok", item

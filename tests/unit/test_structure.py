@@ -117,6 +117,7 @@ ROOMS = (
     ("plugin host", ("", "host", "protocol", "testing")),
     ("engine", ("engine",)),
     ("job", ("job",)),
+    ("images", ("images",)),
     ("run", ("run",)),
     ("experiments", ("experiments",)),
     ("tables", ("tables",)),

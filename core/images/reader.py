@@ -1,0 +1,54 @@
+"""Folders of images as a library's sources (`remap convert renders/gold renders/plastic`, or the export's
+`renders` folder for every material in it): each folder one material rendered elsewhere, checked as
+`remap --source-images` checks it (`calibrate.checked`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..data.scene import ProbeScene
+from ..data.schemas import Material
+from .calibrate import checked
+from .exported import CALIBRATION, Shot
+
+PROBE = Shot.model_construct(name="probe").file(0)
+"""A folder of images holds at least the probe's first seed."""
+
+
+def is_images(path: Path) -> bool:
+    return path.is_dir() and (path / PROBE).is_file() and path.name != CALIBRATION
+
+
+def image_folders(path: Path) -> list[Path]:
+    """The folder itself where it is one material's images, else the ones in it (the export's `renders`)."""
+    if is_images(path):
+        return [path]
+    return sorted(p for p in path.iterdir() if is_images(p)) if path.is_dir() else []
+
+
+class ImagesReader:
+    name = "images"
+    suffixes = ("",)
+    """A folder (no ending)."""
+
+    def accepts(self, path: Path) -> bool:
+        return is_images(path)
+
+    def read(self, path: Path) -> list:
+        from ..library.entries import Entry
+
+        folder = checked(path)
+        material = Material(adapter="images", model="", name=folder.folder.name, native=folder.native())
+        return [Entry(name=folder.folder.name, file=str(folder.folder), material=material)]
+
+
+def images_scene(paths: list[Path]) -> ProbeScene | None:
+    """The probe shot of the export the folders of images come from, where every input is one (their job's
+    scene); None otherwise."""
+    from .folder import ImageFolder
+
+    if not paths or not all(is_images(p) for p in paths):
+        return None
+    scenes = {ImageFolder.open(p).manifest.shot("probe").scene.cache_key(): ImageFolder.open(p).manifest.shot(
+        "probe").scene for p in paths}
+    return next(iter(scenes.values())) if len(scenes) == 1 else None
