@@ -49,3 +49,10 @@ def brdfremap_register_formats(register_reader, register_writer):
     register_writer(UsdWriter("threejs", threejs_models,
                               preview_maps={"gltf_pbr": {"base_color": "diffuse_color", "metallic": "metallic",
                                                          "roughness": "roughness"}}))
+
+
+@hookimpl
+def brdfremap_register_scene_writers(register):
+    from .probe_scene import UsdSceneWriter
+
+    register(UsdSceneWriter())

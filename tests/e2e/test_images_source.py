@@ -153,3 +153,28 @@ def test_remap_convert_takes_the_exports_renders_folder_one_material_a_folder(ex
                  "--quiet"]) == 0
     (item,) = json.loads((out / "convert.json").read_text())["materials"]
     assert item["name"] == "gold" and item["status"] == "ok", item
+
+
+BLENDER = ROOT / "examples" / "outside" / "render_usd_blender.py"
+
+
+def test_blender_importing_the_exported_usd_renders_a_calibration_that_passes(tmp_path):
+    """Blender's own USD importer and Cycles, in a script that does not import brdf-remap: the white
+    Lambertian of the probe and of the bright shot are the analytic radiance, placed right, unclipped."""
+    from brdfremap.adapters.cycles.adapter import CyclesAdapter
+    from brdfremap.core.images.calibrate import calibration_rows
+    from brdfremap.core.images.folder import ImageFolder
+
+    need_adapter(CyclesAdapter)
+    assert main(["scene", "export", str(tmp_path), "--format", "usd", "--resolution", "48", "--spp", "64"]) == 0
+    out = tmp_path / "renders" / "calibration"
+    for shot in ("probe", "bright", "rim"):
+        for seed in (0, 1):
+            done = subprocess.run([sys.executable, str(BLENDER), str(tmp_path / "usd" / f"{shot}.usda"),
+                                   str(out / f"{shot}.seed{seed}.exr"), "--seed", str(seed)],
+                                  capture_output=True, text=True)
+            assert done.returncode == 0, done.stderr[-2000:]
+    folder = ImageFolder.open(out)
+    rows = {r.name: r for r in calibration_rows(folder, folder)}
+    assert all(r.passed for r in rows.values()), [f"{r.name}: {r.detail}" for r in rows.values()]
+    assert {"units", "orientation", "precision", "light rim"} <= set(rows)
