@@ -72,6 +72,9 @@ class BoundImages(ImagesAdapter):
             raise RenderError("adapter 'images' has the full images only, no lobe apart")
         return self.folder.render(scene)
 
+    def noise_of(self, scene: ProbeScene) -> float | None:
+        return self.folder.noise(scene)
+
     def for_native(self, native: Native) -> "BoundImages":
         return self if Path(native.file) == self.folder.folder else ImagesAdapter.for_native(self, native)
 

@@ -366,8 +366,9 @@ class NoiseUnmeasured(_Note):
     shots: list[str]
 
     def sentence(self) -> str:
-        return (f"the source's render noise is not measured where one seed was given ({', '.join(self.shots)}): "
-                "the noise floors there count the target's alone, so errors are judged stricter")
+        return (f"the source's render noise is estimated from the image where one seed was given "
+                f"({', '.join(self.shots)}), not measured: the noise floors there are an estimate's (within a "
+                "factor of three of two seeds' difference), so a verdict near its threshold may go either way")
 
 
 class Underdetermined(_Finding):

@@ -131,6 +131,11 @@ class Adapter(abc.ABC):
         its folder's calibration images are its white Lambertian)."""
         return self
 
+    def noise_of(self, scene: ProbeScene) -> float | None:
+        """Where a second seed cannot be rendered (a source of images given with one): the relative RMSE two
+        renders of ``scene`` would differ by, estimated; None: measured by rendering two seeds."""
+        return None
+
     def native_findings(self) -> list:
         """What a result must say of the material this adapter renders (`for_native`): a source of images
         uncalibrated, or its noise estimated. Findings of `core.data.findings`."""

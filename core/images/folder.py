@@ -17,6 +17,7 @@ from ..data.findings import Unrendered
 from ..data.imageio import read_rgb
 from ..data.scene import ProbeScene
 from ..data.schemas import Native
+from .noise import estimated_noise
 from .exported import CALIBRATION, Manifest, Shot, SEEDS, find_manifest, gain, view_key
 
 
@@ -97,6 +98,12 @@ class ImageFolder:
                               "the sheet's resolution", file=str(path))
         return pixels
 
+    def noise(self, scene: ProbeScene) -> float | None:
+        """Where the shot showing ``scene`` was given with one seed: two such renders' difference, estimated
+        from the image (`noise.estimated_noise`); None where both seeds were given (the difference is
+        measured)."""
+        return _noise_of(self, scene)
+
     def render(self, scene: ProbeScene) -> np.ndarray:
         """The image of the shot that shows this scene: seed 0 for the shot's seed and every other one after
         it, seed 1 between (a fit's seed and the next, a held-out condition's pair), scaled to its light's
@@ -106,6 +113,13 @@ class ImageFolder:
             raise RenderError(f"{self.folder}: {self.problem(scene)}")
         img = self.image(shot, (scene.seed - shot.scene.seed) % SEEDS) * np.float32(gain(shot, scene))
         return downsampled(img, scene.resolution, shot.name)
+
+
+def _noise_of(folder: "ImageFolder", scene: ProbeScene) -> float | None:
+    shot = folder.shot_for(scene)
+    if shot is None or len(folder.files(shot)) == SEEDS:
+        return None
+    return estimated_noise(folder.render(scene))
 
 
 def downsampled(img: np.ndarray, n: int, name: str) -> np.ndarray:

@@ -1,14 +1,11 @@
-"""Folders of images as a library's sources (`remap convert renders/gold renders/plastic`, or the export's
-`renders` folder for every material in it): each folder one material rendered elsewhere, checked as
-`remap --source-images` checks it (`calibrate.checked`)."""
+"""Which folders are one material's images (`remap convert renders/gold renders/plastic`, or the export's
+`renders` folder for every material in it), and their job's scene; `core.library.image_reader` reads them."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 from ..data.scene import ProbeScene
-from ..data.schemas import Material
-from .calibrate import checked
 from .exported import CALIBRATION, Shot
 
 PROBE = Shot.model_construct(name="probe").file(0)
@@ -24,22 +21,6 @@ def image_folders(path: Path) -> list[Path]:
     if is_images(path):
         return [path]
     return sorted(p for p in path.iterdir() if is_images(p)) if path.is_dir() else []
-
-
-class ImagesReader:
-    name = "images"
-    suffixes = ("",)
-    """A folder (no ending)."""
-
-    def accepts(self, path: Path) -> bool:
-        return is_images(path)
-
-    def read(self, path: Path) -> list:
-        from ..library.entries import Entry
-
-        folder = checked(path)
-        material = Material(adapter="images", model="", name=folder.folder.name, native=folder.native())
-        return [Entry(name=folder.folder.name, file=str(folder.folder), material=material)]
 
 
 def images_scene(paths: list[Path]) -> ProbeScene | None:

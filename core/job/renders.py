@@ -211,7 +211,8 @@ class ProbeRenders:
         if self._noise is None:
             with purpose("source"):
                 second = self.source(self.source_params, scene=self.scene.with_(seed=self.scene.seed + 1))
-                self._noise = relative_rmse(self.source_image(), second)
+                estimate = self.source.adapter.noise_of(self.scene)  # one image given: no second seed
+                self._noise = relative_rmse(self.source_image(), second) if estimate is None else estimate
         return self._noise
 
     def scene_chosen(self) -> bool:
@@ -239,7 +240,7 @@ class ProbeRenders:
                         self.job_scene, problems, given=self.other_lights,
                         given_noise=self.given_noise, fit_lights=self.scene.view_scenes()[0].lights,
                         resolution=self.point_resolution(), resolve_limit=self.resolve_limit, sharp=self.sharp,
-                        transmissive=self.transmits)
+                        transmissive=self.transmits, source_noise=self.source.adapter.noise_of)
 
     def held_out(self) -> list[tuple[str, str, ProbeScene]]:
         """Every held-out condition of this job (`core.job.validation.held_out_scenes`) the target renders:

@@ -282,9 +282,14 @@ BLACK = "the source renders black under this light"
 
 
 def _check(render_source, render_target, cond: Condition, a: ProbeScene, b: ProbeScene, scene: ProbeScene,
-           given_noise: float) -> Check | None:
-    """One condition's check from two renders a side; None where the source renders black there."""
+           given_noise: float, source_noise=None) -> Check | None:
+    """One condition's check from two renders a side; None where the source renders black there.
+    ``source_noise(scene)``: two source renders' difference there where a second cannot be rendered (one image
+    given), estimated; None where it is measured."""
     src, src_noise = _mean_and_noise(render_source, a, b)
+    estimate = source_noise(a) if source_noise is not None else None
+    if estimate is not None:
+        src_noise = estimate / np.sqrt(2)  # one image's noise, where two renders' differ by the estimate
     if not np.any(src > 0):
         return None
     ta, tb = _other_seeds(a, b)
@@ -303,20 +308,22 @@ def _check(render_source, render_target, cond: Condition, a: ProbeScene, b: Prob
 
 
 def _measured(render_source, render_target, scene: ProbeScene, given_noise: float, resolve_limit: float | None,
-              cond: Condition, a: ProbeScene, b: ProbeScene) -> tuple[Check | None, ProbeScene, ProbeScene]:
+              source_noise, cond: Condition, a: ProbeScene,
+              b: ProbeScene) -> tuple[Check | None, ProbeScene, ProbeScene]:
     """One condition's check, rendered again at more samples where that can resolve it (`_more_samples`),
     and the two scenes it was taken at."""
-    check = _check(render_source, render_target, cond, a, b, scene, given_noise)
+    check = _check(render_source, render_target, cond, a, b, scene, given_noise, source_noise)
     more = None if check is None else _more_samples(check.noise_floor, resolve_limit, a.spp)
     if more is not None:
         a, b = a.with_(spp=more), b.with_(spp=more)
-        check = _check(render_source, render_target, cond, a, b, scene, given_noise)
+        check = _check(render_source, render_target, cond, a, b, scene, given_noise, source_noise)
     return check, a, b
 
 
 def validate(render_source, render_target, scene: ProbeScene, problems, given: bool = False,
              given_noise: float = 0.0, fit_lights=(), resolution: int | None = None,
-             resolve_limit: float | None = None, sharp: bool = False, transmissive: bool = False) -> Validation:
+             resolve_limit: float | None = None, sharp: bool = False, transmissive: bool = False,
+             source_noise=None) -> Validation:
     """Render both sides under every condition (``render_*(scene) -> image``); ``problems(scene)``
     says why a side cannot render a condition (a light type it lacks), which is then skipped.
     ``given``: the fit ran under other lights than ``scene``'s, whose own are checked first;
@@ -326,9 +333,11 @@ def validate(render_source, render_target, scene: ProbeScene, problems, given: b
     noisier than this is rendered again at more samples where that can resolve it (`_more_samples`),
     and a point light that even they cannot resolve gives way to its disc; ``sharp``: every point
     light is its disc from the start (`held_out_scenes`); ``transmissive``: the source lets light through,
-    and every point light is its backdrop (`Condition.as_backdrop`)."""
+    and every point light is its backdrop (`Condition.as_backdrop`); ``source_noise(scene)``: the source's
+    noise there where it cannot render a second seed (`_check`)."""
     result = Validation()
-    measure = functools.partial(_measured, render_source, render_target, scene, given_noise, resolve_limit)
+    measure = functools.partial(_measured, render_source, render_target, scene, given_noise, resolve_limit,
+                                source_noise)
 
     def blocked(sc: ProbeScene) -> str | None:
         return problems(sc) or _problem(sc)
@@ -348,7 +357,7 @@ def validate(render_source, render_target, scene: ProbeScene, problems, given: b
             # find it), more samples cost tens of seconds and leave the front discs unresolved. The source
             # first (cached for the check): where it alone is over the limit, the target is not rendered.
             if not blocked(da) and _mean_and_noise(render_source, da, db)[1] <= resolve_limit:
-                instead = _check(render_source, render_target, disc, da, db, scene, given_noise)
+                instead = _check(render_source, render_target, disc, da, db, scene, given_noise, source_noise)
                 if instead is not None and instead.noise_floor <= resolve_limit:
                     check, a, b = instead, da, db  # else the point light's outcome stands (unresolved, or black)
         if check is None:

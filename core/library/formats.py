@@ -14,7 +14,8 @@ from typing import Any, Protocol
 from ..data.errors import ConfigError
 from .entries import Converted, Entry, Reader
 from .yaml_reader import YamlReader
-from ..images.reader import ImagesReader, image_folders
+from ..images.reader import image_folders
+from .image_reader import ImagesReader
 from ..data.schemas import ParamKind
 
 __all__ = ["Converted", "Entry", "Reader", "Writer", "Formats", "collect_formats", "expand_inputs", "read_all",

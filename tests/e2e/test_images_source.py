@@ -178,3 +178,19 @@ def test_blender_importing_the_exported_usd_renders_a_calibration_that_passes(tm
     rows = {r.name: r for r in calibration_rows(folder, folder)}
     assert all(r.passed for r in rows.values()), [f"{r.name}: {r.detail}" for r in rows.values()]
     assert {"units", "orientation", "precision", "light rim"} <= set(rows)
+
+
+def test_one_seed_a_shot_has_its_noise_estimated_from_the_image_and_said(export, tmp_path):
+    folder = tmp_path / "export"
+    shutil.copytree(export, folder)
+    gold = folder / "renders" / "gold"
+    for f in gold.glob("*.seed1.exr"):
+        f.unlink()
+    report = _remap(gold, tmp_path / "out")
+    (said,) = [f for f in report["findings"] if f["kind"] == "noise_unmeasured"]
+    assert set(said["shots"]) == {"probe", "grazing", "rim", "headlight", "environment", "back"}
+    assert "estimated from the image" in said["message"]
+    # The estimate stands in the floors: not the target's noise alone (the source's one image repeated, 0).
+    floors = {c["condition"]: c["noise_floor"] for c in report["validation"]}
+    paired = {c["condition"]: c["noise_floor"] for c in _remap(export / "renders" / "gold", tmp_path / "two")["validation"]}
+    assert all(floors[c] > 0 for c in floors) and floors["environment"] > 0.3 * paired["environment"]
