@@ -24,8 +24,8 @@ import numpy as np
 from ..data.account import Ledger, Metered, purpose
 from ..data.atomic import why
 from ..data.errors import RemapError, RenderError
-from ..data.findings import SameMaterial, SmoothHeld, UniformTarget, Verdict
-from ..data.imageio import write_exr, write_previews
+from ..data.findings import SameMaterial, SmoothHeld, Underdetermined, UniformTarget, Verdict
+from ..data.imageio import display_exposure, preview, write_exr, write_png, write_previews
 from ..data.schemas import Lobe, ParamKind, Value
 from ..data.settings import FitScene, Inputs, Start
 from ..engine import ProgressFn, remap
@@ -182,7 +182,7 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
                    progress, alternatives=alternatives(resolved, start, smooth) if informed else [], notes=notes,
                    needed=needed(resolved, start) if free and job.settings.inputs == Inputs.NEEDED else {})
     files = artifacts(adapters[tgt.adapter], resolved.target_spec, result.params, renders.source_image(), result.target_image,
-                      texturing)
+                      texturing, parting(renders, result.params, result.verdict))
     info = describe(adapters, list(dict.fromkeys((src.adapter, tgt.adapter))))
     derived = (resolved.source_spec.derive(resolved.source_params), resolved.target_spec.derive(result.params))
     report = build_report(resolved, result, start=start, derived=derived, fit_scene=fit,
@@ -249,8 +249,29 @@ def lookup_notes(job: Job) -> list:
     return [TableLookup(table=lk.table, method=lk.method, expected_error=lk.expected_error, outside=lk.outside)]
 
 
+PARTING = "underdetermined.png"
+"""The target at the fit's parameters and at the others within its noise, side by side, under the held-out
+condition where they part most (`core.engine.underdetermined`)."""
+
+
+def parting(renders: ProbeRenders, params: dict[str, Value], verdict) -> tuple[np.ndarray, np.ndarray] | None:
+    """The two images an `Underdetermined` finding compares (cached renders), or None where there is none."""
+    found = next((f for f in verdict.findings if isinstance(f, Underdetermined)), None)
+    if found is None:
+        return None
+    scene = next(sc for name, _, sc in renders.held_out() if name == found.condition)
+    return renders.target_at(params, scene), renders.target_at({**params, **found.other}, scene)
+
+
+def _parting_png(d: Path, images: tuple[np.ndarray, np.ndarray]) -> Path:
+    k = display_exposure(images[0])
+    write_png(d / PARTING, np.concatenate([preview(images[0], k), preview(images[1], k)], axis=1))
+    return d / PARTING
+
+
 def artifacts(adapter: Adapter, model: Model, params: dict[str, Value], source: np.ndarray,
-              target: np.ndarray, texturing: Texturing | None = None) -> dict[str, bytes]:
+              target: np.ndarray, texturing: Texturing | None = None,
+              parted: tuple[np.ndarray, np.ndarray] | None = None) -> dict[str, bytes]:
     """The result's files, by name: linear EXRs, PNG previews, the material in the target's own form
     (made in a temporary folder, where this process runs, and handed over as bytes); a textured
     source's maps, the native material reading them, and the textured check's images."""
@@ -260,7 +281,7 @@ def artifacts(adapter: Adapter, model: Model, params: dict[str, Value], source: 
             write_exr(d / "source.exr", source)
             write_exr(d / "target.exr", target)
             write_previews(d, source, target)
-            paths = [d / n for n in IMAGES]
+            paths = [d / n for n in IMAGES] + ([_parting_png(d, parted)] if parted is not None else [])
             if texturing is None:
                 paths += [Path(p) for p in adapter.write_native(model, params, d)]
             else:

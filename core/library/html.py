@@ -10,6 +10,8 @@ from ..data.atomic import write_text_atomic
 from ..data.schemas import format_value
 from .records import ItemStatus
 from ..data.scene import Lighting
+from ..data.findings import Underdetermined
+from ..job.execute import PARTING
 
 if TYPE_CHECKING:
     from .convert import Conversion, Item
@@ -45,6 +47,8 @@ def _card(item: "Item") -> dict:
         m = rep.metrics
         card["report"] = {
             "folder": folder, "images": [f"{folder}/{n}.png" for n in ("source", "target", "error")],
+            "parting": next(({"image": f"{folder}/{PARTING}", "label": f.label, "difference": f.difference}
+                             for f in rep.findings if isinstance(f, Underdetermined)), None),
             # A source with no reading has no values to show (its held `transmission` is not one of its file's).
             "before": {} if src is not None and src.native is not None and not src.model else
             {k: format_value(_tuple(v)) for k, v in rep.source.params.items()},
