@@ -7,14 +7,13 @@ any image can show (finite, a black background, clipped, 8-bit)."""
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
 
 from ..data.errors import ConfigError
 
-from ..data.metrics import beyond_noise, eight_bit, relative_rmse
+from ..data.metrics import beyond_noise, clipped_at, eight_bit, relative_rmse
 from ..host.analytic import analytic_lambert
 from ..host.check import _FLIP_FIX, _PLACEMENTS, _SHIFT_FIX, _SHIFTS, _factor, _inner, _placed, Row
 from .exported import ALBEDO, Shot
@@ -49,6 +48,19 @@ def _basic(name: str, img: np.ndarray) -> str | None:
     return None
 
 
+def quantized(img: np.ndarray) -> tuple[int, float] | None:
+    """(levels, step) where the lit pixels take at most 256 values, all whole multiples of one step: an 8-bit
+    image, whatever it was scaled by after (an exposure undone); float renders take nearly one value a pixel."""
+    lit = np.asarray(img, np.float64)
+    lit = lit[lit > 0]
+    levels = np.unique(lit)
+    if lit.size < 1024 or not 2 <= levels.size <= 256:
+        return None
+    step = float(np.diff(np.concatenate([[0.0], levels])).min())
+    ratio = levels / step
+    return (int(levels.size), step) if np.allclose(ratio, np.round(ratio), atol=1e-3) else None
+
+
 def image_rows(folder: ImageFolder) -> list[Row]:
     """What any image must be (the calibration's or a material's): finite, non-negative, a black
     background, not clipped at 1, not 8-bit."""
@@ -60,13 +72,13 @@ def image_rows(folder: ImageFolder) -> list[Row]:
             if why:
                 return [Row("images", False, why, "render the sphere alone: no world light seen by the camera, no "
                             "denoiser, no post-processing")]
-            top = float(img.max())
-            if math.isclose(top, 1.0, abs_tol=1e-6) and int((img >= top).sum()) > 8:
-                return [Row("precision", False, f"{path.name}: {int((img >= top).sum())} pixels at exactly 1: clipped",
-                            "write float EXR: no 8-bit output, no tone curve or view transform that stops at 1")]
-            if eight_bit(np.minimum(img, 1.0)):
-                return [Row("precision", False, f"{path.name}: every pixel one of 256 levels: an 8-bit image",
-                            "write 32-bit or half float EXR")]
+            clip, levels, steps = clipped_at(img), eight_bit(img), quantized(img)
+            words = ([f"every pixel one of 256 {levels} levels (8-bit)"] if levels else [
+                f"every lit pixel one of {steps[0]} levels {steps[1]:.4g} apart (8-bit, scaled)"] if steps else []) + (
+                [f"{clip[1]} pixels at exactly {clip[0]:.4g} (clipped)"] if clip and not steps else [])
+            if words:
+                return [Row("precision", False, f"{path.name}: {' and '.join(words)}", "write 32-bit or half float "
+                            "EXR: no 8-bit output, no tone curve or view transform that stops at 1")]
     return out
 
 
@@ -178,8 +190,10 @@ def calibration_rows(folder: ImageFolder, material: ImageFolder) -> list[Row]:
     encoded = _encoding(img, want, inner)
     if encoded is not None:
         return [encoded]
-    found = [_units(img, noise, want, inner), _orientation(img, want, inner), _bright(folder), _seeds(folder)]
-    return [r for r in found if r is not None] + _conditions(folder)
+    found = [r for r in (_units(img, noise, want, inner), _orientation(img, want, inner), _bright(folder),
+                         _seeds(folder)) if r is not None]
+    # Each other shot is judged only on an image placed and scaled right: else its rows repeat those causes.
+    return found + (_conditions(folder) if all(r.passed for r in found[:2]) else [])
 
 
 class ImagesRejected(ConfigError):

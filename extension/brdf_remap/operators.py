@@ -146,12 +146,14 @@ class BRDFREMAP_OT_export(_Follows, bpy.types.Operator):
 
 
 class BRDFREMAP_OT_import(_Follows, ImportHelper, bpy.types.Operator):
-    """Import another renderer's materials (Mitsuba, MaterialX, glTF, USD), each remapped to Cycles"""
+    """Import another renderer's materials (Mitsuba, MaterialX, glTF, USD, or a folder of images rendered from
+    `remap scene export`'s scenes: pick one of its images), each remapped to Cycles"""
 
     bl_idname = "brdf_remap.import_matched"
     bl_label = "Import matched"
     filepath: StringProperty(subtype="FILE_PATH", options={"SKIP_SAVE", "HIDDEN"})  # the browser each time
-    filter_glob: StringProperty(default="*.xml;*.mtlx;*.gltf;*.glb;*.usd;*.usda;*.usdc;*.usdz", options={"HIDDEN"})
+    filter_glob: StringProperty(default="*.xml;*.mtlx;*.gltf;*.glb;*.usd;*.usda;*.usdc;*.usdz;*.exr",
+                                options={"HIDDEN"})
 
     def invoke(self, context, event):
         if not self.filepath:
@@ -162,7 +164,9 @@ class BRDFREMAP_OT_import(_Follows, ImportHelper, bpy.types.Operator):
         file = Path(self.filepath)
         if not file.is_file():
             raise Refused(f"{file}: no such file")
-        work.SESSION.start(command, work.Import(file), [file], "cycles", work.scratch() / "out", quality)
+        # An image of a folder of images (probe.seed0.exr ...): the folder is the material, rendered elsewhere.
+        source = file.parent if file.suffix.lower() == ".exr" else file
+        work.SESSION.start(command, work.Import(source), [source], "cycles", work.scratch() / "out", quality)
 
 
 class BRDFREMAP_OT_accept(bpy.types.Operator):

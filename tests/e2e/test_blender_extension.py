@@ -46,12 +46,29 @@ def test_the_zip_builds_validates_and_its_version_is_the_tool_s(extension_zip, t
         build.build(tmp_path / "out", bad)
 
 
+def _images(folder):
+    """A gold sphere's images of the exported probe and back shots, rendered by Mitsuba from the exported XML."""
+    from brdfremap.core.cli import main
+
+    assert main(["scene", "export", str(folder), "--format", "mitsuba", "--resolution", "32", "--spp", "64"]) == 0
+    (folder / "gold.xml").write_text('<scene version="3.0.0"><bsdf type="roughconductor" id="material"><string '
+                                     'name="material" value="Au"/><float name="alpha" value="0.2"/></bsdf></scene>')
+    gold = folder / "renders" / "gold"
+    done = subprocess.run([sys.executable, str(ROOT / "examples" / "outside" / "render_mitsuba.py"),
+                           str(folder / "mitsuba"), str(gold), "--material", str(folder / "gold.xml"), "--shot", "probe",
+                           "--shot", "back"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return gold
+
+
 def test_every_operator_works_headless_on_real_files(extension_zip, tmp_path, corpus, cycles_adapter):
     env = {**os.environ, "BLENDER_USER_RESOURCES": str(tmp_path / "blender-user")}
     mitsuba = corpus / "mitsuba-data" / "docs" / "scenes" / "bsdf_roughconductor_copper.xml"
     mtlx = corpus / "materialx" / "StandardSurface" / "standard_surface_copper.mtlx"
+    images = _images(tmp_path / "export")  # a folder of images rendered elsewhere: one of its images is picked
     run = subprocess.run([sys.executable, str(DRIVER), str(extension_zip), str(tmp_path), sys.executable,
-                          str(mitsuba), str(mtlx)], capture_output=True, text=True, timeout=1800, env=env)
+                          str(mitsuba), str(mtlx), str(images / "probe.seed0.exr")], capture_output=True, text=True,
+                         timeout=1800, env=env)
     assert "RESULT " in run.stdout, (run.stdout + run.stderr)[-4000:]
     log = json.loads(run.stdout.split("RESULT ", 1)[1].splitlines()[0])
     print(json.dumps({k: v.get("panel") for k, v in log.items() if isinstance(v, dict) and "panel" in v}, indent=1))
@@ -79,7 +96,7 @@ def test_every_operator_works_headless_on_real_files(extension_zip, tmp_path, co
     for target in ("GLTF", "MITSUBA", "MATERIALX"):
         assert "1 material(s)" in log[f"export {target}"]["panel"][0], log[f"export {target}"]
 
-    for name in ("mitsuba", "mtlx"):
+    for name in ("mitsuba", "mtlx", "images"):
         before, after = log[f"import {name}"]["materials"], log[f"accept {name}"]["materials"]
         added = set(after) - set(before)
         assert added, (name, log[f"import {name}"]["panel"])
