@@ -11,15 +11,16 @@ from xml.sax.saxutils import quoteattr
 from brdfremap.core.data.atomic import write_text_atomic
 from brdfremap.core.data.imageio import read_image, write_exr
 from brdfremap.core.data.scene import EnvironmentLight, PointLight, ProbeScene
+from brdfremap.core.host.check import ALBEDO
 
 from .envmap import mitsuba_rows
 
 MATERIAL = "material.xml"
-WHITE = """<scene version="3.0.0">
-    <!-- The calibration material: a white Lambertian of albedo 0.8. Put your material here, with the same id. -->
+WHITE = f"""<scene version="3.0.0">
+    <!-- The calibration material: a white Lambertian of albedo {ALBEDO:g}. Put your material here, with the same id. -->
     <bsdf type="twosided" id="material">
         <bsdf type="diffuse">
-            <rgb name="reflectance" value="0.8, 0.8, 0.8"/>
+            <rgb name="reflectance" value="{ALBEDO:g}, {ALBEDO:g}, {ALBEDO:g}"/>
         </bsdf>
     </bsdf>
 </scene>
@@ -91,6 +92,12 @@ def scene_xml(scene: ProbeScene, emitters: list[str]) -> str:
 class MitsubaSceneWriter:
     name = "mitsuba"
     suffix = ".xml"
+    swap = (f"Mitsuba XML: each scene includes `{MATERIAL}` beside it, a `<bsdf id=\"material\">`: write yours "
+            "there (`examples/outside/render_mitsuba.py --material` does it for you).")
+
+    @staticmethod
+    def unavailable_reason() -> str | None:
+        return None  # text: nothing to import
 
     def write(self, scene: ProbeScene, path: Path, maps: dict[str, Path]) -> list[Path]:
         here = path.parent

@@ -36,6 +36,7 @@ import numpy as np
 from brdfremap.core.data.atomic import temp_beside
 from brdfremap.core.data.errors import RemapError
 from brdfremap.core.data.scene import EnvironmentLight, PointLight, ProbeScene
+from brdfremap.core.host.check import ALBEDO  # the calibration material's albedo
 
 SPHERE_SEGMENTS = 192
 """Around the sphere (half as many from pole to pole), a 2.4 MB .usda. Against the Cycles adapter's
@@ -48,7 +49,6 @@ APERTURE = 0.36
 """The camera's horizontal and vertical aperture in tenths of a scene unit (UsdGeomCamera): a 36 mm
 square film back; the focal length gives the field of view."""
 MATERIAL_PATH = "/World/Looks/material"
-ALBEDO = 0.8
 
 
 class UsdSceneWriter:
@@ -56,6 +56,16 @@ class UsdSceneWriter:
 
     name = "usd"
     suffix = ".usda"
+    swap = (f"USD: the sphere `/World/Sphere` is bound to `{MATERIAL_PATH}` (a UsdPreviewSurface of the white "
+            "Lambertian): bind yours instead. A dome light cannot be hidden from the camera in USD itself: keep the "
+            "background black (Blender: film transparent, as `examples/outside/render_usd_blender.py` does).")
+
+    @staticmethod
+    def unavailable_reason() -> str | None:
+        import importlib.util
+
+        return None if importlib.util.find_spec("pxr") is not None else \
+            "usd-core is not installed: pip install 'brdf-remap[threejs]' (it brings usd-core)"
 
     def write(self, scene: ProbeScene, path: Path, maps: dict[str, Path]) -> list[Path]:
         """The stage at ``path``, naming each environment map in ``maps`` relative to itself."""

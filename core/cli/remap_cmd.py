@@ -80,6 +80,10 @@ def images_scene(folder: str):
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.source_images and (args.table or args.scene):
+        flag = "--table" if args.table else "--scene"
+        raise ConfigError(f"does not go with --source-images: images are of the export's scenes, fitted "
+                          f"{'' if args.table else 'on its probe '}as they are", field=flag)
     if args.table:
         from .table_cmd import lookup
 

@@ -372,8 +372,8 @@ class NoiseUnmeasured(_Note):
 
 
 class Underdetermined(_Finding):
-    """Parameters within the noise of the fit's that look otherwise under a held-out condition: what was fitted
-    does not determine the material there."""
+    """Parameters within the noise of the fit's that look otherwise under a held-out condition the source was not
+    given under (`core.engine.underdetermined`): what was fitted does not determine the material there."""
 
     kind: Literal["underdetermined"] = "underdetermined"
     condition: Lighting
@@ -383,20 +383,13 @@ class Underdetermined(_Finding):
     other: dict[str, Value] = Field(description="The other parameters' values that differ from the fit's.")
     fitted: dict[str, Value] = Field(description="The fit's values of those parameters.")
     error: float = Field(description="The other parameters' error on the fit scene.")
-    checked: bool = Field(description="Whether the source was judged under that condition (then the check decides).")
-
-    @computed_field  # type: ignore[prop-decorator]
-    @property
-    def severity(self) -> Severity:
-        return Severity.NOTE if self.checked else Severity.UNRELIABLE
 
     def sentence(self) -> str:
         moved = ", ".join(f"{k} {format_value(self.fitted[k])} -> {format_value(v)}" for k, v in self.other.items())
-        where = "where the source was judged, which decides" if self.checked else \
-            "which the source was not judged under: what was fitted does not determine the material there (give " \
-            "that condition's images, or judge the result under it yourself)"
         return (f"underdetermined: other parameters within the fit's noise ({moved}; {self.error:.2%} on the fit "
-                f"scene) look {self.difference:.1%} different under the {self.label}, {where}")
+                f"scene) look {self.difference:.1%} different under the {self.label}, which the source was not "
+                "given under: what was fitted does not determine the material there (give that condition's images, "
+                "or judge the result under it yourself)")
 
 
 class NothingFitted(_Note):

@@ -56,18 +56,18 @@ def _within(fit: Level, params: dict[str, Value], error: float, weakest: Weakest
 
 def underdetermined(renders: Renders, fit: Level, params: dict[str, Value], error: float, weakest: Weakest | None,
                     validation: Validation, floor: float, threshold: float) -> Underdetermined | None:
-    """The held-out condition where parameters within the fit's noise part most, if by more than ``threshold``,
-    where a condition was not given (`Unrendered`: a source of images without it); else None, and nothing
-    rendered (a job whose source renders every condition is judged under them instead)."""
-    if weakest is None or floor <= 0 or not any(isinstance(v, Unrendered) for v in validation.skipped.values()):
+    """The held-out condition not given (`Unrendered`: a source of images without it) where parameters within
+    the fit's noise part most, if by more than ``threshold``; else None, and nothing rendered (a condition the
+    source was judged under is decided by its check)."""
+    unjudged = {name for name, why in validation.skipped.items() if isinstance(why, Unrendered)}
+    if weakest is None or floor <= 0 or not unjudged:
         return None
-    conditions = renders.held_out()
+    conditions = [c for c in renders.held_out() if c[0] in unjudged]
     found: Underdetermined | None = None
     for other, moved, err in _within(fit, params, error, weakest, floor):
         for name, label, scene in conditions:
             diff = relative_rmse(renders.target_at(params, scene), renders.target_at(other, scene))
             if diff > threshold and (found is None or diff > found.difference):
                 found = Underdetermined(condition=name, label=label, difference=diff, other=moved,
-                                        fitted={k: params[k] for k in moved}, error=err,
-                                        checked=name not in validation.skipped)
+                                        fitted={k: params[k] for k in moved}, error=err)
     return found

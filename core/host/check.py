@@ -72,7 +72,7 @@ class Row:
     """A failure the adapter declares a property of its renderer (`Adapter.transmission_limit`)."""
 
 
-def _factor(ratio: float) -> str:
+def usual_factor(ratio: float) -> str:
     """The usual factor a ratio is nearest to (within 3 %), or ""."""
     name, value = min(FACTORS.items(), key=lambda kv: abs(math.log(ratio / kv[1])))
     return name if abs(math.log(ratio / value)) < 0.03 else ""
@@ -84,25 +84,25 @@ def calibration(render: Callable, white: tuple[str, dict] | None) -> Row:
         return Row(name, None, "no calibration material", "declare a white diffuse material of albedo 0.8 "
                    "(a definition's `calibration: {model: ..., params: {...}}`)")
     img = render(white[0], white[1], CALIBRATION)
-    inner = _inner(CALIBRATION)
+    inner = inner_pixels(CALIBRATION)
     full = analytic_lambert(CALIBRATION, ALBEDO)
     # Judged on the image as it would be placed right: a flipped or shifted image is orientation's
     # failure, not a units factor (one row low read as "10.92 % off; 1.023x").
-    errors = _placed(full, img, inner)
+    errors = placements(full, img, inner)
     best = min(errors, key=errors.get)
     err = errors[best]
     if err < CALIBRATION_TOLERANCE:
         placed = "" if best == "as expected" else f" with the image placed right (it is {best}: see orientation)"
         return Row(name, True, f"{err:.2%} from the analytic radiance{placed}")
     ratio = float(img[inner].sum() / max(full[inner].sum(), 1e-30))
-    known = _factor(ratio)
+    known = usual_factor(ratio)
     why = f"{err:.2%} off; the image is {ratio:.4g}x the analytic radiance" + (f" (a factor of {known})" if known else "")
     return Row(name, False, why, "pixels are radiance (W m^-2 sr^-1); the light's intensity is radiant intensity in "
                "W/sr (a power P in W is 4π·I); the diffuse BRDF is albedo/π; no tone mapping or 8-bit output "
                "(see precision)")
 
 
-_FLIPS = {"mirrored left-right": lambda a: a[:, ::-1], "upside down": lambda a: a[::-1, :],
+FLIPS = {"mirrored left-right": lambda a: a[:, ::-1], "upside down": lambda a: a[::-1, :],
           "rotated half a turn": lambda a: a[::-1, ::-1], "transposed": lambda a: np.swapaxes(a, 0, 1)}
 
 
@@ -114,35 +114,35 @@ def _moved(rows: int, columns: int, half: bool = False) -> Callable:
     return move
 
 
-_SHIFTS = {"shifted one row down": _moved(1, 0), "shifted one row up": _moved(-1, 0),
+SHIFTS = {"shifted one row down": _moved(1, 0), "shifted one row up": _moved(-1, 0),
            "shifted one column right": _moved(0, 1), "shifted one column left": _moved(0, -1),
            "shifted half a row down": _moved(1, 0, True), "shifted half a row up": _moved(-1, 0, True),
            "shifted half a column right": _moved(0, 1, True), "shifted half a column left": _moved(0, -1, True)}
 """An image a pixel or half of one off (pixel centres at i or i + 1 instead of i + 0.5, a film with a
 border row): what it looks like, the analytic image moved so; half a pixel, as the mean of two rows."""
-_PLACEMENTS = {"as expected": lambda a: a, **_FLIPS, **_SHIFTS}
-_FLIP_FIX = "right-handed world, the camera looking down -z with +y up; image row 0 at the top, column 0 at the left"
-_SHIFT_FIX = ("pixel centres at ((j + 0.5)/W, (i + 0.5)/H) of the image plane, row 0 at the top, column 0 at the "
+PLACEMENTS = {"as expected": lambda a: a, **FLIPS, **SHIFTS}
+FLIP_FIX = "right-handed world, the camera looking down -z with +y up; image row 0 at the top, column 0 at the left"
+SHIFT_FIX = ("pixel centres at ((j + 0.5)/W, (i + 0.5)/H) of the image plane, row 0 at the top, column 0 at the "
               "left: no border row or column, no half-pixel offset in the camera or the film")
 
 
 def _symmetric(mask: np.ndarray) -> np.ndarray:
     """The pixels inside the sphere in every flip of the image (a centred sphere: nearly all)."""
-    return mask & _FLIPS["rotated half a turn"](mask) & _FLIPS["transposed"](mask)
+    return mask & FLIPS["rotated half a turn"](mask) & FLIPS["transposed"](mask)
 
 
-def _inner(scene: ProbeScene) -> np.ndarray:
-    """The pixels inside the sphere in every placement of the image (`_PLACEMENTS`): the symmetric
+def inner_pixels(scene: ProbeScene) -> np.ndarray:
+    """The pixels inside the sphere in every placement of the image (`PLACEMENTS`): the symmetric
     interior, less a pixel all round (what a shift moves in or out)."""
     m = _symmetric(sphere_hits(scene).interior)
     return m & np.roll(m, 1, 0) & np.roll(m, -1, 0) & np.roll(m, 1, 1) & np.roll(m, -1, 1)
 
 
-def _placed(want: np.ndarray, img: np.ndarray, inner: np.ndarray, same_total: bool = False) -> dict[str, float]:
-    """How far the image is from the expected one placed each way (`_PLACEMENTS`); with ``same_total``,
+def placements(want: np.ndarray, img: np.ndarray, inner: np.ndarray, same_total: bool = False) -> dict[str, float]:
+    """How far the image is from the expected one placed each way (`PLACEMENTS`); with ``same_total``,
     each placed at the image's total (so that a scale error, units' failure, does not hide the shape)."""
     errors = {}
-    for k, f in _PLACEMENTS.items():
+    for k, f in PLACEMENTS.items():
         placed = f(want)[inner]
         if same_total:
             placed = placed * float(img[inner].sum() / max(float(placed.sum()), 1e-30))
@@ -158,12 +158,12 @@ def orientation(render: Callable, white: tuple[str, dict] | None) -> Row:
         return Row(name, None, "no calibration material", "declare one (see units)")
     scene = SCENE.model_copy(update={"lights": [PointLight(theta=50.0, phi=150.0)]})
     img = render(white[0], white[1], scene)
-    errors = _placed(analytic_lambert(scene, ALBEDO), np.asarray(img, np.float64), _inner(scene), same_total=True)
+    errors = placements(analytic_lambert(scene, ALBEDO), np.asarray(img, np.float64), inner_pixels(scene), same_total=True)
     best = min(errors, key=errors.get)
     if best == "as expected":
         return Row(name, True, f"{errors[best]:.2%} from the expected image (scaled to its total)")
     return Row(name, False, f"the image is {best} ({errors[best]:.2%} from that, {errors['as expected']:.2%} from "
-               "the expected one)", _SHIFT_FIX if best in _SHIFTS else _FLIP_FIX)
+               "the expected one)", SHIFT_FIX if best in SHIFTS else FLIP_FIX)
 
 
 def determinism(render: Callable, models: dict) -> Row:
@@ -195,7 +195,7 @@ def seed(render: Callable, white: tuple[str, dict] | None, environment: bool = F
         return Row(name, None, "no calibration material", "declare one (see units)")
     scene = NOISY.model_copy(update={"lights": [EnvironmentLight(type="environment", map="studio")]}) \
         if environment else NOISY
-    inner = _inner(scene)
+    inner = inner_pixels(scene)
     first, second = (np.asarray(render(white[0], white[1], scene.with_(seed=s)), np.float64) for s in (0, 1))
     if not np.array_equal(first, second):
         return Row(name, True, f"seeds 0 and 1 are {relative_rmse(first[inner], second[inner]):.2%} apart at "

@@ -15,8 +15,8 @@ from ..data.errors import ConfigError
 
 from ..data.metrics import beyond_noise, clipped_at, eight_bit, relative_rmse
 from ..host.analytic import analytic_lambert
-from ..host.check import _FLIP_FIX, _PLACEMENTS, _SHIFT_FIX, _SHIFTS, _factor, _inner, _placed, Row
-from .exported import ALBEDO, Shot
+from ..host.check import FLIP_FIX, PLACEMENTS, SHIFT_FIX, SHIFTS, usual_factor, inner_pixels, placements, Row
+from .exported import ALBEDO, CALIBRATION, Shot
 from ..data.scene import ProbeScene
 from .folder import ImageFolder, downsampled
 
@@ -25,6 +25,9 @@ UNITS_TOLERANCE = 0.02
 XML: 0.3 %; Cycles from the exported USD: see docs/images.md)."""
 GAMMA_TOLERANCE = 0.08
 """The pixels go as the radiance to a power further than this from 1: an encoded image (sRGB: about 0.45)."""
+BRIGHT_TOLERANCE = 0.9
+"""The bright shot's brightest pixel at least this fraction of its analytic value: a renderer that clamps
+samples or rolls highlights off below it would cut a material's highlights as well."""
 CONDITION_TOLERANCE = 0.10
 """A point-light condition further than this beyond its noise from the analytic image: the renderer draws
 that light otherwise (a grazing or rim light a renderer places or samples wrong), which no fit can absorb."""
@@ -85,8 +88,8 @@ def image_rows(folder: ImageFolder) -> list[Row]:
 def _encoding(img: np.ndarray, want: np.ndarray, inner: np.ndarray) -> Row | None:
     """The power the pixels go as of the radiance (a log-log line through the lit interior): an encoded
     image (sRGB, a display gamma) is named as such, not as a units factor or a shift."""
-    errors = _placed(want, img, inner, same_total=True)
-    want = _PLACEMENTS[min(errors, key=errors.get)](want)  # a flipped image's curve, as it lies
+    errors = placements(want, img, inner, same_total=True)
+    want = PLACEMENTS[min(errors, key=errors.get)](want)  # a flipped image's curve, as it lies
     lit = inner & (want.mean(axis=2) > 0.02 * want.max()) & (img.mean(axis=2) > 0)
     if lit.sum() < 16:
         return None
@@ -101,13 +104,13 @@ def _encoding(img: np.ndarray, want: np.ndarray, inner: np.ndarray) -> Row | Non
 
 
 def _units(img: np.ndarray, noise: float | None, want: np.ndarray, inner: np.ndarray) -> Row:
-    errors = _placed(want, img, inner)
+    errors = placements(want, img, inner)
     best = min(errors, key=errors.get)
     far = beyond_noise(errors[best], noise or 0.0)
     if far < UNITS_TOLERANCE:
         return Row("units", True, f"probe: {errors[best]:.2%} from the analytic radiance ({far:.2%} beyond the noise)")
     ratio = float(img[inner].sum() / max(float(want[inner].sum()), 1e-30))
-    known = _factor(ratio)
+    known = usual_factor(ratio)
     said = f" (a factor of {known})" if known else ""
     return Row("units", False, f"probe: {errors[best]:.2%} from the analytic radiance; the image is {ratio:.4g}x it"
                f"{said}", "pixels are radiance (W m^-2 sr^-1): no exposure or gain; a point light's intensity is "
@@ -115,15 +118,17 @@ def _units(img: np.ndarray, noise: float | None, want: np.ndarray, inner: np.nda
 
 
 def _orientation(img: np.ndarray, want: np.ndarray, inner: np.ndarray) -> Row:
-    errors = _placed(want, img, inner, same_total=True)
+    errors = placements(want, img, inner, same_total=True)
     best = min(errors, key=errors.get)
     if best == "as expected":
         return Row("orientation", True, f"probe: {errors[best]:.2%} from the expected image (scaled to its total)")
     return Row("orientation", False, f"probe: the image is {best} ({errors[best]:.2%} from that, "
-               f"{errors['as expected']:.2%} from the expected one)", _SHIFT_FIX if best in _SHIFTS else _FLIP_FIX)
+               f"{errors['as expected']:.2%} from the expected one)", SHIFT_FIX if best in SHIFTS else FLIP_FIX)
 
 
-def _bright(folder: ImageFolder) -> Row:
+def _bright(folder: ImageFolder) -> Row | None:
+    if not any(s.name == "bright" for s in folder.manifest.shots):
+        return None  # a probe of no point light: no bright shot was exported
     shot = next((s for s in folder.given if s.name == "bright"), None)
     if shot is None:
         return Row("precision", False, "no image of the bright shot", "render bright.seed0.exr and .seed1.exr of the "
@@ -131,7 +136,7 @@ def _bright(folder: ImageFolder) -> Row:
     img, _ = _pair(folder, shot)
     want = analytic_lambert(shot.scene, ALBEDO)
     top, expected = float(img.max()), float(want.max())
-    if top < 0.5 * expected:
+    if top < BRIGHT_TOLERANCE * expected:
         return Row("precision", False, f"bright: the brightest pixel is {top:.3g} where it should be {expected:.3g}: "
                    "clipped or compressed", "write float EXR with no tone curve (highlights far above 1 are kept)")
     return Row("precision", True, f"bright: brightest {top:.3g} (expected {expected:.3g})")
@@ -186,7 +191,7 @@ def calibration_rows(folder: ImageFolder, material: ImageFolder) -> list[Row]:
         return rows
     probe = next(s for s in folder.given if s.name == "probe")
     img, noise = _pair(folder, probe)
-    want, inner = analytic_lambert(probe.scene, ALBEDO), _inner(probe.scene)
+    want, inner = analytic_lambert(probe.scene, ALBEDO), inner_pixels(probe.scene)
     encoded = _encoding(img, want, inner)
     if encoded is not None:
         return [encoded]
@@ -205,10 +210,13 @@ def checked(path: str | Path) -> ImageFolder:
     fitted: each failing row is one line of the error (naming the folder), nothing is fitted to a wrong
     image. No calibration folder is no failure: the result says it is uncalibrated."""
     folder = ImageFolder.open(path)
+    if folder.folder.name == CALIBRATION:
+        raise ConfigError("is the calibration's folder (the white Lambertian as exported), not a material's: give "
+                          "the folder of your material's images beside it", file=str(folder.folder))
     if not any(s.name == "probe" for s in folder.given):
         raise ConfigError(f"has no image of the probe (probe.seed0.exr): render {folder.manifest_path.parent}'s "
                           "probe scene with the material, as SHEET.md says", file=str(folder.folder))
-    rows = image_rows(folder)
+    rows = image_rows(folder) or [r for r in [_seeds(folder)] if r is not None]
     if folder.calibration is not None and not rows:
         rows = calibration_rows(folder.calibration, folder)
     failed = [r for r in rows if r.passed is False]

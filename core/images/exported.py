@@ -17,6 +17,7 @@ from ..data.configio import load_yaml_model
 from ..data.errors import ConfigError
 from ..data.model import Strict
 from ..data.scene import PointLight, ProbeScene
+from ..host.check import ALBEDO, BRIGHT  # the calibration material, and the bright shot's scale
 from ..job.fitscene import back_light
 from ..job.validation import CONDITIONS, scenes
 
@@ -24,17 +25,13 @@ FORMAT = "brdf-remap scene export"
 MANIFEST = "scenes.json"
 CALIBRATION = "calibration"
 """The folder (beside a material's) of the white Lambertian's images."""
-ALBEDO = 0.8
-"""The calibration material: a white Lambertian of this albedo (`core.host.check.ALBEDO`)."""
-BRIGHT = 200.0
-"""The calibration's bright shot: the probe's light this many times brighter, its sphere's brightest pixels
-far above 1, so that an image clipped at 1 (8-bit output, a tone curve) shows (`core.host.check.BRIGHT`)."""
 SEEDS = 2
 """Each shot is rendered with two seeds (the scene's and the next): their difference is the noise."""
 
 
 class Shot(Strict):
-    name: str = Field(description="The shot's name: its images are NAME.seed0.exr and NAME.seed1.exr.")
+    name: str = Field(pattern=r"^[a-z0-9_-]+$", description="The shot's name: its images are NAME.seed0.exr and "
+                                                             "NAME.seed1.exr (in the folder: no path).")
     label: str = Field(description="What it shows, in words.")
     scene: ProbeScene = Field(description="Its one view at the resolution and samples to render (seed 0; seed1: +1).")
     calibration_only: bool = Field(False, description="Rendered of the calibration material only.")
@@ -69,7 +66,7 @@ def view_key(scene: ProbeScene) -> str:
     """What a scene shows (sphere, camera, lights: not its size, samples or seed), as JSON. A single point
     light's intensity is left out: its image is the light's intensity times one image (`gain`)."""
     first = scene.view_scenes()[0]
-    lights = [x.key() for x in first.lights]
+    lights = [{k: round(v, 6) if isinstance(v, float) else v for k, v in x.key().items()} for x in first.lights]
     if _one_point(first) is not None:
         lights = [{k: v for k, v in lights[0].items() if k != "intensity"}]
     return json.dumps({"sphere": first.sphere.model_dump(mode="json"), "camera": first.camera.model_dump(mode="json"),
@@ -90,7 +87,7 @@ def shots(scene: ProbeScene, spp: int) -> list[Shot]:
     resolution and ``spp``, seed 0."""
     first = scene.view_scenes()[0].with_(spp=spp, seed=0)
     out = [Shot(name="probe", label="the probe: the scene's own lights", scene=first.with_(name="probe"))]
-    for cond, a, _ in scenes(first, CONDITIONS):
+    for cond, a, _ in scenes(first, CONDITIONS, fit_lights=first.lights):  # the studio turned if the probe is it
         out.append(Shot(name=str(cond.name), label=cond.label, scene=first.model_copy(update={
             "lights": list(a.lights), "name": str(cond.name)})))
     out.append(Shot(name="back", label="the fit's back light: 100 degrees from the view, opposite the probe's "

@@ -74,8 +74,12 @@ class ImageFolder:
         return Native(file=str(self.folder), name=self.folder.name, sha256=self.digest)
 
     def shot_for(self, scene: ProbeScene) -> Shot | None:
+        """The given shot that shows ``scene``: of those of its view (`view_key`), the one of the same light
+        intensity, else a material's (the calibration's bright shot is the probe's light, brighter)."""
         key = view_key(scene)
-        return next((s for s in self.given if view_key(s.scene) == key), None)
+        found = [s for s in self.given if view_key(s.scene) == key]
+        return next((s for s in found if gain(s, scene) == 1.0), None) or \
+            next((s for s in found if not s.calibration_only), None)
 
     def problem(self, scene: ProbeScene) -> Unrendered | None:
         shot = self.shot_for(scene)
@@ -122,14 +126,23 @@ def _noise_of(folder: "ImageFolder", scene: ProbeScene) -> float | None:
     return estimated_noise(folder.render(scene))
 
 
+def _area_weights(size: int, n: int) -> np.ndarray:
+    """n x size: how much of each of ``size`` pixels falls in each of ``n`` (each row sums to 1)."""
+    edges = np.linspace(0.0, size, n + 1)
+    lo, hi = edges[:-1, None], edges[1:, None]
+    px = np.arange(size)[None, :]
+    overlap = np.clip(np.minimum(hi, px + 1) - np.maximum(lo, px), 0.0, None)
+    return overlap / overlap.sum(axis=1, keepdims=True)
+
+
 def downsampled(img: np.ndarray, n: int, name: str) -> np.ndarray:
-    """An image box-filtered to n x n (an integer factor smaller), as a renderer's box pixel filter would
-    have made it at that size."""
+    """An image area-averaged to n x n pixels, as a renderer's box pixel filter would have made it at that size
+    (a fit's coarse levels are 32, 40, 48 ... pixels: any size at most the image's)."""
     size = img.shape[0]
     if size == n:
         return img
-    if n > size or size % n:
-        raise RenderError(f"shot {name} is {size} pixels wide and a condition is judged at {n}: export the scenes "
-                          f"at a resolution that is a multiple of {n}")
-    k = size // n
-    return img.reshape(n, k, n, k, 3).mean(axis=(1, 3)).astype(np.float32)
+    if n > size:
+        raise RenderError(f"shot {name} is {size} pixels wide and a fit asks for {n}: export the scenes at {n} pixels "
+                          "or more (`remap scene export --resolution`)")
+    w = _area_weights(size, n)
+    return np.einsum("ai,ijc,bj->abc", w, img.astype(np.float64), w).astype(np.float32)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..data.errors import ConfigError
 from ..data.scene import ProbeScene
 from .exported import CALIBRATION, Shot
 
@@ -30,6 +31,11 @@ def images_scene(paths: list[Path]) -> ProbeScene | None:
 
     if not paths or not all(is_images(p) for p in paths):
         return None
-    scenes = {ImageFolder.open(p).manifest.shot("probe").scene.cache_key(): ImageFolder.open(p).manifest.shot(
-        "probe").scene for p in paths}
-    return next(iter(scenes.values())) if len(scenes) == 1 else None
+    scenes = {}
+    for p in paths:
+        probe = ImageFolder.open(p).manifest.shot("probe").scene
+        scenes.setdefault(probe.cache_key(), []).append(p)
+    if len(scenes) > 1:
+        raise ConfigError("come from exports of different scenes (" + "; ".join(
+            ", ".join(str(p) for p in ps) for ps in scenes.values()) + "): convert each export's folders apart")
+    return ImageFolder.open(paths[0]).manifest.shot("probe").scene

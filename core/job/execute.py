@@ -36,6 +36,7 @@ from ..engine.results import EngineResult
 from .fitscene import FitScene as Chosen, as_given as given_scene, choose as choose_scene
 from .job import Job, Resolved
 from .renders import CachedRenderer, ProbeRenders
+from .report import PARTING
 from .report import FileRecord, Report, build_report
 from .texturing import Texturing, textured_findings
 from ..data.scene import LightType, ProbeScene
@@ -155,7 +156,7 @@ def execute(resolved: Resolved, adapters: AdapterPool, progress: ProgressFn | No
     env_ok = all(LightType.ENVIRONMENT in adapters[n].light_types for n in (src.adapter, tgt.adapter))
     with purpose("fit scene"):
         fit = given_scene(lambda sc: source(resolved.source_params, scene=sc), job.scene,
-                          lambda sc: own.scene_problem(sc) is None) if own.fixed_scenes else \
+                          lambda sc: own.scene_problem(sc) is None, own.noise_of) if own.fixed_scenes else \
             choose_scene(lambda sc: source(resolved.source_params, scene=sc), job.scene, env_ok,
                            job.settings.resolve_limit, fit_policy(job),
                            smooth=resolved.source_spec.is_smooth(resolved.source_params) or resolved.target_spec.smooth,
@@ -247,11 +248,6 @@ def lookup_notes(job: Job) -> list:
     if lk is None:
         return []
     return [TableLookup(table=lk.table, method=lk.method, expected_error=lk.expected_error, outside=lk.outside)]
-
-
-PARTING = "underdetermined.png"
-"""The target at the fit's parameters and at the others within its noise, side by side, under the held-out
-condition where they part most (`core.engine.underdetermined`)."""
 
 
 def parting(renders: ProbeRenders, params: dict[str, Value], verdict) -> tuple[np.ndarray, np.ndarray] | None:

@@ -117,11 +117,12 @@ def back_light(scene: ProbeScene) -> PointLight:
 
 
 def as_given(render: Callable[[ProbeScene], np.ndarray], scene: ProbeScene,
-             renders: Callable[[ProbeScene], bool]) -> FitScene:
+             renders: Callable[[ProbeScene], bool], estimate: Callable[[ProbeScene], float | None]) -> FitScene:
     """The fit scene of a source that renders only the scenes it was given (images: `core.images`): the
     job's scene, with the back light's view where the source renders it (``renders(scene)``) and it
-    resolves the source as `with_back_light` asks."""
-    noise = source_noise(render, scene)
+    resolves the source as `with_back_light` asks; ``estimate(scene)``: its noise where one seed was given."""
+    given = estimate(scene)
+    noise = source_noise(render, scene) if given is None else given
     found = FitScene(scene, noise=noise, scene_noise=noise)
     back = scene.model_copy(update={"lights": [back_light(scene)]})
     if scene.views or scene.environment is not None or not renders(back) or not noise <= GOAL:

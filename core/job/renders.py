@@ -239,8 +239,10 @@ class ProbeRenders:
         return validate(lambda sc: self.source(self.source_params, scene=sc), lambda sc: self.target(params, scene=sc),
                         self.job_scene, problems, given=self.other_lights,
                         given_noise=self.given_noise, fit_lights=self.scene.view_scenes()[0].lights,
-                        resolution=self.point_resolution(), resolve_limit=self.resolve_limit, sharp=self.sharp,
-                        transmissive=self.transmits, source_noise=self.source.adapter.noise_of)
+                        resolution=self.point_resolution(), sharp=self.sharp, transmissive=self.transmits,
+                        # A source of images has the samples it was given: more of the target's resolve nothing.
+                        resolve_limit=None if self.source.adapter.fixed_scenes else self.resolve_limit,
+                        source_noise=self.source.adapter.noise_of)
 
     def held_out(self) -> list[tuple[str, str, ProbeScene]]:
         """Every held-out condition of this job (`core.job.validation.held_out_scenes`) the target renders:

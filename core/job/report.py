@@ -41,6 +41,10 @@ changed what a verdict is (an unresolved condition is unchecked, no longer a not
 its findings hold, and 7 what a fit varies (the inputs a source needs) and what a metal is judged
 beyond (the renderers' metals): a result of 6 or before is run again (its engine is older too)."""
 
+PARTING = "underdetermined.png"
+"""A result's image of the target at the fit's parameters and at the others within its noise, side by side,
+under the held-out condition where they part most (`core.engine.underdetermined`)."""
+
 
 class NewerReportError(ConfigError):
     """A report written by a newer brdf-remap: not to be read, nor overwritten."""

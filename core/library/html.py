@@ -11,7 +11,7 @@ from ..data.schemas import format_value
 from .records import ItemStatus
 from ..data.scene import Lighting
 from ..data.findings import Underdetermined
-from ..job.execute import PARTING
+from ..job.report import PARTING
 
 if TYPE_CHECKING:
     from .convert import Conversion, Item
