@@ -367,8 +367,9 @@ class NoiseUnmeasured(_Note):
 
     def sentence(self) -> str:
         return (f"the source's render noise is estimated from the image where one seed was given "
-                f"({', '.join(self.shots)}), not measured: the noise floors there are an estimate's (within a "
-                "factor of three of two seeds' difference), so a verdict near its threshold may go either way")
+                f"({', '.join(self.shots)}), not measured: the noise floors there are a rough estimate's (a quarter to "
+                "seven times two seeds' difference on the exported scenes), so a verdict near its threshold may go "
+                "either way")
 
 
 class Underdetermined(_Finding):

@@ -4,8 +4,8 @@ difference of two seeds is the measure; this is the fallback, and a result says 
 Immerkær's estimator (1996): the image convolved with a kernel that cancels every plane and smooth ramp
 leaves the noise, whose mean absolute value gives its standard deviation; over the sphere's interior (two
 pixels in from its edge, which the kernel would read as noise). On the exported scenes rendered by
-Mitsuba it comes within a factor of three of two seeds' difference (bench in docs/images.md): an
-estimate, said as one."""
+Mitsuba and by Blender it is a quarter to seven times two seeds' difference (`bench/images_noise.py`: a
+rim light's thin crescent reads as noise, a smooth shading hides some): a rough estimate, said as one."""
 
 from __future__ import annotations
 
