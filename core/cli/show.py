@@ -19,7 +19,8 @@ def format_params(params: dict, names: list[str] | None = None) -> str:
 def _held_out(r: Report) -> str:
     """Each held-out condition's error, with its noise floor where that is not negligible."""
     if not r.validation:
-        return "not checked (--validate none)" if not r.validation_skipped else "none could be rendered"
+        return "not checked (--validate none)" if not r.validation_skipped else \
+            "none: " + "; ".join(f"{k} {v}" for k, v in r.validation_skipped.items())
     parts = [f"{c.label} {c.error:.1%}" + (f" (noise {c.noise_floor:.1%})" if c.noise_floor >= 0.01 else "")
              for c in r.validation]
     levels: dict[tuple[int, int], list[str]] = {}

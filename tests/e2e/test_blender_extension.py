@@ -96,7 +96,7 @@ def test_every_operator_works_headless_on_real_files(extension_zip, tmp_path, co
     for target in ("GLTF", "MITSUBA", "MATERIALX"):
         assert "1 material(s)" in log[f"export {target}"]["panel"][0], log[f"export {target}"]
 
-    for name in ("mitsuba", "mtlx", "images"):
+    for name in ("mitsuba", "images", "mtlx"):
         before, after = log[f"import {name}"]["materials"], log[f"accept {name}"]["materials"]
         added = set(after) - set(before)
         assert added, (name, log[f"import {name}"]["panel"])

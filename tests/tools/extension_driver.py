@@ -139,7 +139,7 @@ def main() -> None:
     for target in ("GLTF", "MITSUBA", "MATERIALX"):
         step(log, f"export {target}", lambda: bpy.ops.brdf_remap.export(target=target, scope="SELECTED"))
     log["exported"] = sorted(str(p.relative_to(folder)) for p in (folder / "scene.brdf-remap").glob("*/library.*"))
-    for name, file in (("mitsuba", mitsuba), ("mtlx", mtlx), ("images", images)):
+    for name, file in (("mitsuba", mitsuba), ("images", images), ("mtlx", mtlx)):  # the panel: after MaterialX
         step(log, f"import {name}", lambda: bpy.ops.brdf_remap.import_matched(filepath=file))
         step(log, f"accept {name}", bpy.ops.brdf_remap.accept)
     log["panel"] = panel()
