@@ -17,3 +17,10 @@ def brdfremap_register_formats(register_reader, register_writer):
 
     register_reader(GltfReader())
     register_writer(GltfLibraryWriter())
+
+
+@hookimpl
+def brdfremap_register_scene_writers(register):
+    from .probe_scene import GltfSceneWriter
+
+    register(GltfSceneWriter())

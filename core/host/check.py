@@ -35,7 +35,8 @@ def _half(img: np.ndarray) -> bool:
     lit = lit[lit > 0]
     return bool(lit.size) and np.array_equal(lit, lit.astype(np.float16).astype(np.float32))
 FACTORS = {"π": math.pi, "1/π": 1 / math.pi, "2": 2.0, "1/2": 0.5, "4π": 4 * math.pi, "1/(4π)": 1 / (4 * math.pi),
-           "2π": 2 * math.pi, "1/(2π)": 1 / (2 * math.pi)}
+           "2π": 2 * math.pi, "1/(2π)": 1 / (2 * math.pi), "1/683 (lumens per watt)": 1 / 683.0,
+           "4π/683 (candela read as watts)": 4 * math.pi / 683.0}
 """Scale errors with a usual cause: radiance against irradiance (π), power against intensity (4π)."""
 BRIGHT = 200.0
 """The intensity scale of the clipping check: the sphere's brightest pixels well above 1."""

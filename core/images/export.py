@@ -104,8 +104,10 @@ def export(folder: Path, scene: ProbeScene, spp: int, formats: list[str] | None 
         (folder / name).mkdir(exist_ok=True)
         for shot in manifest.shots:
             path = folder / name / f"{shot.name}{writer.suffix}"
-            written += writer.write(shot.scene, path, maps)
-            files.setdefault(name, {})[shot.name] = str(path.relative_to(folder))
+            made = writer.write(shot.scene, path, maps)  # none: the format cannot hold this shot's lights
+            written += made
+            if made:
+                files.setdefault(name, {})[shot.name] = str(path.relative_to(folder))
     manifest = manifest.model_copy(update={"files": files})
     for sub in (CALIBRATION, "MATERIAL"):
         (folder / RENDERS / sub).mkdir(parents=True, exist_ok=True)

@@ -196,3 +196,29 @@ def test_one_seed_a_shot_has_its_noise_estimated_from_the_image_and_said(export,
     floors = {c["condition"]: c["noise_floor"] for c in report["validation"]}
     paired = {c["condition"]: c["noise_floor"] for c in _remap(export / "renders" / "gold", tmp_path / "two")["validation"]}
     assert all(floors[c] > 0 for c in floors) and floors["environment"] > 0.3 * paired["environment"]
+
+
+def test_the_gltf_scenes_pass_the_khronos_validator_and_hold_the_probe_as_exported(tmp_path):
+    """glTF for real-time engines: every shot of point lights one document (the studio none: glTF has no
+    environment light), valid, its sphere, camera and light where the scene puts them."""
+    from brdfremap.core.data.scene import ProbeScene
+    import shutil as sh  # noqa: F811
+
+    assert main(["scene", "export", str(tmp_path), "--format", "gltf", "--resolution", "48"]) == 0
+    files = json.loads((tmp_path / "scenes.json").read_text())["files"]["gltf"]
+    assert sorted(files) == ["back", "bright", "grazing", "headlight", "probe", "rim"]  # no environment
+    if sh.which("node") is None:
+        pytest.skip("Node.js is not installed")
+    validator = ROOT / "adapters" / "threejs" / "web" / "validate.mjs"
+    for shot, rel in files.items():
+        out = subprocess.run(["node", str(validator), str(tmp_path / rel)], capture_output=True, text=True, check=True)
+        assert json.loads(out.stdout)["issues"]["numErrors"] == 0, (shot, out.stdout[:500])
+    doc = json.loads((tmp_path / files["probe"]).read_text())
+    probe = ProbeScene(resolution=48)
+    nodes = {n["name"]: n for n in doc["nodes"]}
+    assert nodes["sphere"]["scale"] == [probe.sphere.radius] * 3
+    assert np.allclose(nodes["camera"]["translation"], probe.camera.position)
+    assert np.allclose(nodes["light0"]["translation"], probe.lights[0].position)
+    assert doc["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] == probe.lights[0].intensity
+    assert doc["materials"][0]["extensions"]["KHR_materials_specular"]["specularFactor"] == 0.0
+    assert "(no gltf)" in (tmp_path / "SHEET.md").read_text()
