@@ -16,3 +16,10 @@ def brdfremap_register_formats(register_reader, register_writer):
 
     register_reader(BlendReader())
     register_writer(BlendLibraryWriter())
+
+
+@hookimpl
+def brdfremap_register_scene_writers(register):
+    from .probe_scene import BlendSceneWriter
+
+    register(BlendSceneWriter())

@@ -3,7 +3,8 @@
 Protocol: one JSON object per line on stdin, one JSON answer per line on the protocol
 channel (the process's original stdout; Blender's own prints are sent to stderr so they
 cannot corrupt it). Requests: {"op": "render", "model", "params", "scene", "out"},
-{"op": "save_blend", "model", "params", "path"}, {"op": "ping"}, {"op": "quit"}.
+{"op": "save_blend", "model", "params", "path"}, {"op": "save_scene", "model", "params", "scene", "path"},
+{"op": "ping"}, {"op": "quit"}.
 Run as ``python -m brdfremap.adapters.cycles.worker``; it exits when stdin closes."""
 
 from __future__ import annotations
@@ -427,6 +428,27 @@ class BlenderState(SceneBuilder, MaterialNodes):
         self.drop(mat)
         return {}
 
+    def save_scene(self, req: dict) -> dict:
+        """The probe scene as this worker renders it (camera, sphere, lights, world, render settings) with a
+        material of a model on the sphere, saved as a .blend a user opens and renders (`remap scene
+        export`); the environment's map packed into it."""
+        self.setup_scene(req["scene"])
+        mat = self.material(req["model"], req["params"])
+        mat.name = "material"
+        self.probes.use(mat, True)
+        scene = self.bpy.context.scene
+        for attr in LOBE_PASSES:  # a user's render: the image alone, one EXR
+            setattr(scene.view_layers[0], attr, False)
+        ims = scene.render.image_settings
+        ims.media_type = "IMAGE"
+        ims.file_format, ims.color_depth = "OPEN_EXR", "32"
+        for image in self.bpy.data.images:
+            if image.source == "FILE" and not image.packed_file:
+                image.pack()
+        self.bpy.ops.wm.save_as_mainfile(filepath=req["path"], copy=True, compress=True)
+        self.scene_key, self.passes = None, None  # packed, its output changed: rebuilt at the next request
+        return {}
+
     def save_library(self, req: dict) -> dict:
         """One .blend holding a material per item, each under the item's name (Blender keeps 63
         bytes of a name: the names it kept are answered)."""
@@ -490,6 +512,8 @@ def main() -> int:
                 result = state.render_native(req)
             elif op == "render_saved":
                 result = state.render_saved(req)
+            elif op == "save_scene":
+                result = state.save_scene(req)
             elif op == "save_library":
                 result = state.save_library(req)
             elif op == "read_blend":

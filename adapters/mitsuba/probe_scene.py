@@ -99,6 +99,9 @@ class MitsubaSceneWriter:
     def unavailable_reason() -> str | None:
         return None  # text: nothing to import
 
+    def close(self) -> None:
+        """Nothing held."""
+
     def write(self, scene: ProbeScene, path: Path, maps: dict[str, Path]) -> list[Path]:
         here = path.parent
         emitters = [_emitter(x, maps, here) for x in scene.lights]

@@ -92,6 +92,9 @@ class GltfSceneWriter:
     def unavailable_reason() -> str | None:
         return None  # JSON: nothing to import
 
+    def close(self) -> None:
+        """Nothing held."""
+
     def write(self, scene: ProbeScene, path: Path, maps: dict[str, Path]) -> list[Path]:
         if scene.environment is not None:
             return []

@@ -67,6 +67,9 @@ class UsdSceneWriter:
         return None if importlib.util.find_spec("pxr") is not None else \
             "usd-core is not installed: pip install 'brdf-remap[threejs]' (it brings usd-core)"
 
+    def close(self) -> None:
+        """Nothing held."""
+
     def write(self, scene: ProbeScene, path: Path, maps: dict[str, Path]) -> list[Path]:
         """The stage at ``path``, naming each environment map in ``maps`` relative to itself."""
         from pxr import Usd, UsdGeom

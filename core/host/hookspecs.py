@@ -59,4 +59,7 @@ def brdfremap_register_scene_writers(register):
     0.8 on the sphere, which a user swaps for their material (the sheet says how: ``material`` names it
     in the file); ``maps`` gives each environment light's map (its ``map`` field) as the path of an
     equirectangular EXR in the project's convention (`core.data.environment`) with its scale and rotation
-    applied, which the file names relative to itself. Returns every file written."""
+    applied, which the file names relative to itself. Returns every file written (none: the format cannot
+    hold that scene's lights). Also ``swap`` (a line of the sheet: how a user puts their material in the
+    format's file), ``unavailable_reason()`` (None, or why it cannot write here: a package missing) and
+    ``close()`` (called after an export: a writer that runs its renderer lets it go)."""

@@ -102,12 +102,15 @@ def export(folder: Path, scene: ProbeScene, spp: int, formats: list[str] | None 
     for name in chosen:
         writer = writers[name]
         (folder / name).mkdir(exist_ok=True)
-        for shot in manifest.shots:
-            path = folder / name / f"{shot.name}{writer.suffix}"
-            made = writer.write(shot.scene, path, maps)  # none: the format cannot hold this shot's lights
-            written += made
-            if made:
-                files.setdefault(name, {})[shot.name] = str(path.relative_to(folder))
+        try:
+            for shot in manifest.shots:
+                path = folder / name / f"{shot.name}{writer.suffix}"
+                made = writer.write(shot.scene, path, maps)  # none: the format cannot hold this shot's lights
+                written += made
+                if made:
+                    files.setdefault(name, {})[shot.name] = str(path.relative_to(folder))
+        finally:
+            writer.close()  # a writer that runs its renderer (a .blend's) lets it go
     manifest = manifest.model_copy(update={"files": files})
     for sub in (CALIBRATION, "MATERIAL"):
         (folder / RENDERS / sub).mkdir(parents=True, exist_ok=True)

@@ -222,3 +222,26 @@ def test_the_gltf_scenes_pass_the_khronos_validator_and_hold_the_probe_as_export
     assert doc["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] == probe.lights[0].intensity
     assert doc["materials"][0]["extensions"]["KHR_materials_specular"]["specularFactor"] == 0.0
     assert "(no gltf)" in (tmp_path / "SHEET.md").read_text()
+
+
+def test_a_blender_user_opening_the_exported_blend_renders_a_calibration_that_passes(tmp_path):
+    """The .blend is the scene the Cycles adapter renders, saved: opened and rendered (F12) by a script that
+    does not import brdf-remap, its calibration passes every row."""
+    from brdfremap.adapters.cycles.adapter import CyclesAdapter
+    from brdfremap.core.images.calibrate import calibration_rows
+    from brdfremap.core.images.folder import ImageFolder
+
+    need_adapter(CyclesAdapter)
+    assert main(["scene", "export", str(tmp_path), "--format", "blend", "--resolution", "48", "--spp", "64"]) == 0
+    out = tmp_path / "renders" / "calibration"
+    out.mkdir(parents=True, exist_ok=True)
+    for shot in ("probe", "bright", "rim"):
+        for seed in (0, 1):
+            done = subprocess.run([sys.executable, str(ROOT / "examples" / "outside" / "render_blend.py"),
+                                   str(tmp_path / "blend" / f"{shot}.blend"), str(out / f"{shot}.seed{seed}.exr"),
+                                   "--seed", str(seed)], capture_output=True, text=True)
+            assert done.returncode == 0, done.stderr[-2000:]
+    folder = ImageFolder.open(out)
+    rows = {r.name: r for r in calibration_rows(folder, folder)}
+    assert all(r.passed for r in rows.values()), [f"{r.name}: {r.detail}" for r in rows.values()]
+    assert not list((tmp_path / "blend").glob(".*")), "no temporary or backup file left"
