@@ -98,7 +98,7 @@ def _encoding(img: np.ndarray, want: np.ndarray, inner: np.ndarray) -> Row | Non
     if abs(power - 1.0) <= GAMMA_TOLERANCE:
         return None
     return Row("encoding", False, f"probe: the pixels go as the radiance to the power {power:.2f}, not 1: "
-               f"{'gamma- or sRGB-encoded (a display curve)' if power < 1 else 'a curve applied'}",
+               f"{'gamma- or sRGB-encoded (a display curve)' if power < 1 else 'a curve applied, or not the white Lambertian of albedo 0.8 the export holds'}",
                "write linear radiance: no view transform or display curve (Blender: Standard; other renderers: "
                "linear, raw or scene-referred output), no gamma")
 
@@ -195,10 +195,12 @@ def calibration_rows(folder: ImageFolder, material: ImageFolder) -> list[Row]:
     encoded = _encoding(img, want, inner)
     if encoded is not None:
         return [encoded]
-    found = [r for r in (_units(img, noise, want, inner), _orientation(img, want, inner), _bright(folder),
-                         _seeds(folder)) if r is not None]
-    # Each other shot is judged only on an image placed and scaled right: else its rows repeat those causes.
-    return found + (_conditions(folder) if all(r.passed for r in found[:2]) else [])
+    found = [_units(img, noise, want, inner), _orientation(img, want, inner)]
+    # The bright shot and each other shot are judged only on images placed and scaled right: else their rows
+    # repeat those causes (a 1/(4π) in the units read as clipping).
+    if not all(r.passed for r in found):
+        return found + [r for r in [_seeds(folder)] if r is not None]
+    return [r for r in (*found, _bright(folder), _seeds(folder)) if r is not None] + _conditions(folder)
 
 
 class ImagesRejected(ConfigError):
@@ -214,14 +216,24 @@ def checked(path: str | Path) -> ImageFolder:
         raise ConfigError("is the calibration's folder (the white Lambertian as exported), not a material's: give "
                           "the folder of your material's images beside it", file=str(folder.folder))
     if not any(s.name == "probe" for s in folder.given):
-        raise ConfigError(f"has no image of the probe (probe.seed0.exr): render {folder.manifest_path.parent}'s "
-                          "probe scene with the material, as SHEET.md says", file=str(folder.folder))
-    rows = image_rows(folder) or [r for r in [_seeds(folder)] if r is not None]
+        raise ConfigError(f"has no image of the probe (probe.seed0.exr){_strays(folder)}: render "
+                          f"{folder.manifest_path.parent}'s probe scene with the material, as SHEET.md says",
+                          file=str(folder.folder))
+    rows, where = image_rows(folder) or [r for r in [_seeds(folder)] if r is not None], folder.folder
     if folder.calibration is not None and not rows:
-        rows = calibration_rows(folder.calibration, folder)
+        rows, where = calibration_rows(folder.calibration, folder), folder.calibration.folder
     failed = [r for r in rows if r.passed is False]
     if failed:
         lines = "\n".join(f"  {r.name}: {r.detail} -> {r.fix}" for r in failed)
-        raise ImagesRejected(f"not fitted: {len(failed)} check(s) of its images failed:\n{lines}",
-                             file=str(folder.folder))
+        whose = "its images" if where == folder.folder else f"the calibration's images (for {folder.folder.name})"
+        raise ImagesRejected(f"not fitted: {len(failed)} check(s) of {whose} failed:\n{lines}", file=str(where))
     return folder
+
+
+def _strays(folder: ImageFolder) -> str:
+    """The images in the folder no shot is named by (a misnamed render), said where the probe is missing."""
+    named = {s.file(i) for s in folder.manifest.shots for i in range(2)}
+    stray = sorted(p.name for p in folder.folder.iterdir() if p.suffix.lower() in (".exr", ".hdr", ".pfm", ".png")
+                   and p.name not in named)
+    return f"; it holds {', '.join(stray[:6])}{' …' if len(stray) > 6 else ''}, named otherwise (SHOT.seed0.exr, " \
+        "SHOT.seed1.exr)" if stray else ""
