@@ -76,7 +76,7 @@ def images_scene(folder: str):
     """The job's scene of a source given as images: the export's probe shot."""
     from ..images.folder import ImageFolder
 
-    return ImageFolder.open(folder).manifest.shot("probe").scene
+    return ImageFolder.open(folder).probe_scene
 
 
 def run(args: argparse.Namespace) -> int:

@@ -70,6 +70,11 @@ class ImageFolder:
                     h.update(f.read_bytes())
         return h.hexdigest()[:20]
 
+    @property
+    def probe_scene(self) -> ProbeScene:
+        """The export's probe shot: a source of images' job scene."""
+        return self.manifest.shot("probe").scene
+
     def native(self) -> Native:
         return Native(file=str(self.folder), name=self.folder.name, sha256=self.digest)
 
@@ -106,7 +111,10 @@ class ImageFolder:
         """Where the shot showing ``scene`` was given with one seed: two such renders' difference, estimated
         from the image (`noise.estimated_noise`); None where both seeds were given (the difference is
         measured)."""
-        return _noise_of(self, scene)
+        shot = self.shot_for(scene)
+        if shot is None or len(self.files(shot)) == SEEDS:
+            return None
+        return estimated_noise(self.render(scene))
 
     def render(self, scene: ProbeScene) -> np.ndarray:
         """The image of the shot that shows this scene: seed 0 for the shot's seed and every other one after
@@ -117,13 +125,6 @@ class ImageFolder:
             raise RenderError(f"{self.folder}: {self.problem(scene)}")
         img = self.image(shot, (scene.seed - shot.scene.seed) % SEEDS) * np.float32(gain(shot, scene))
         return downsampled(img, scene.resolution, shot.name)
-
-
-def _noise_of(folder: "ImageFolder", scene: ProbeScene) -> float | None:
-    shot = folder.shot_for(scene)
-    if shot is None or len(folder.files(shot)) == SEEDS:
-        return None
-    return estimated_noise(folder.render(scene))
 
 
 def _area_weights(size: int, n: int) -> np.ndarray:

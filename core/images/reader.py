@@ -31,11 +31,11 @@ def images_scene(paths: list[Path]) -> ProbeScene | None:
 
     if not paths or not all(is_images(p) for p in paths):
         return None
-    scenes = {}
+    scenes: dict[str, tuple[ProbeScene, list[Path]]] = {}
     for p in paths:
-        probe = ImageFolder.open(p).manifest.shot("probe").scene
-        scenes.setdefault(probe.cache_key(), []).append(p)
+        probe = ImageFolder.open(p).probe_scene
+        scenes.setdefault(probe.cache_key(), (probe, []))[1].append(p)
     if len(scenes) > 1:
         raise ConfigError("come from exports of different scenes (" + "; ".join(
-            ", ".join(str(p) for p in ps) for ps in scenes.values()) + "): convert each export's folders apart")
-    return ImageFolder.open(paths[0]).manifest.shot("probe").scene
+            ", ".join(str(p) for p in ps) for _, ps in scenes.values()) + "): convert each export's folders apart")
+    return next(iter(scenes.values()))[0]
