@@ -7,6 +7,8 @@ from .host.testing import (  # noqa: F401
     SphereHits,
     analytic_glass,
     analytic_lambert,
+    box_filtered,
+    box_filtered_lambert,
     environment_irradiance,
     point_light_irradiance,
     scene_for,

@@ -22,7 +22,9 @@ class SphereHits:
     view: np.ndarray  # H x W x 3, unit vector from the surface to the camera
 
 
-def _rays(scene: ProbeScene, offsets: tuple[float, float]):
+def _directions(scene: ProbeScene, px: np.ndarray, py: np.ndarray):
+    """The eye and the unit ray directions through image points (px, py) in pixels (column, row; pixel
+    (i, j)'s centre at (j + 0.5, i + 0.5)), of any shape."""
     cam = scene.camera
     eye = np.array(cam.position, dtype=np.float64)
     fwd = np.array(cam.target) - eye
@@ -32,12 +34,16 @@ def _rays(scene: ProbeScene, offsets: tuple[float, float]):
     up = np.cross(right, fwd)
     n = scene.resolution
     half = math.tan(math.radians(cam.fov) / 2)
-    idx = np.arange(n, dtype=np.float64)
-    x = ((idx + offsets[0]) / n * 2 - 1) * half
-    y = (1 - (idx + offsets[1]) / n * 2) * half
-    xx, yy = np.meshgrid(x, y)
-    d = fwd + xx[..., None] * right + yy[..., None] * up
+    x = (np.asarray(px, np.float64) / n * 2 - 1) * half
+    y = (1 - np.asarray(py, np.float64) / n * 2) * half
+    d = fwd + x[..., None] * right + y[..., None] * up
     return eye, d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+
+def _rays(scene: ProbeScene, offsets: tuple[float, float]):
+    idx = np.arange(scene.resolution, dtype=np.float64)
+    xx, yy = np.meshgrid(idx + offsets[0], idx + offsets[1])
+    return _directions(scene, xx, yy)
 
 
 def _hit(scene: ProbeScene, eye, d):
@@ -52,13 +58,43 @@ def _hit(scene: ProbeScene, eye, d):
 
 def sphere_hits(scene: ProbeScene) -> SphereHits:
     eye, d = _rays(scene, (0.5, 0.5))
-    mask, t = _hit(scene, eye, d)
-    interior = mask.copy()
+    interior = _hit(scene, eye, d)[0]
     for off in ((0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)):
         interior &= _hit(scene, *_rays(scene, off))[0]
+    return _surface(scene, eye, d, interior)
+
+
+def _surface(scene: ProbeScene, eye: np.ndarray, d: np.ndarray, interior: np.ndarray | None = None) -> SphereHits:
+    mask, t = _hit(scene, eye, d)
     pos = eye + t[..., None] * d
     normal = (pos - np.array(scene.sphere.center)) / scene.sphere.radius
-    return SphereHits(mask, interior, pos, normal, -d)
+    return SphereHits(mask, mask if interior is None else interior, pos, normal, -d)
+
+
+EDGE_MARGIN = 2
+"""`box_filtered` integrates the pixels this close to the silhouette (in pixels), where the shading changes
+within a pixel (a rim light's crescent peaks there); inside, a pixel's centre is its mean to a few 1e-4."""
+
+
+def box_filtered(scene: ProbeScene, shade, k: int = 16) -> np.ndarray:
+    """An image ``shade(hits) -> (..., 3)`` as a box pixel filter makes it: each pixel within `EDGE_MARGIN` of
+    the silhouette the mean of k x k rays over its area, the others their centre's ray (zero off the sphere
+    is ``shade``'s to give, as `point_light_irradiance` does). What a renderer that integrates its pixels draws
+    at the edge, for the cost of the edge."""
+    hits = sphere_hits(scene)
+    img = np.array(shade(hits), np.float64)
+    solid = hits.interior
+    for _ in range(EDGE_MARGIN):
+        solid = solid & np.roll(solid, 1, 0) & np.roll(solid, -1, 0) & np.roll(solid, 1, 1) & np.roll(solid, -1, 1)
+    near = hits.mask
+    for _ in range(EDGE_MARGIN):
+        near = near | np.roll(near, 1, 0) | np.roll(near, -1, 0) | np.roll(near, 1, 1) | np.roll(near, -1, 1)
+    rows, cols = np.nonzero(near & ~solid)
+    if rows.size:
+        off = (np.arange(k) + 0.5) / k
+        eye, d = _directions(scene, cols[:, None, None] + off[None, None, :], rows[:, None, None] + off[None, :, None])
+        img[rows, cols] = np.asarray(shade(_surface(scene, eye, d)), np.float64).reshape(rows.size, k * k, -1).mean(1)
+    return img
 
 
 def point_light_irradiance(scene: ProbeScene, hits: SphereHits, light: PointLight | None = None
@@ -107,10 +143,16 @@ def environment_irradiance(radiance: np.ndarray, normals: np.ndarray, width: int
 
 def analytic_lambert(scene: ProbeScene, albedo: float | tuple[float, float, float] = 0.8) -> np.ndarray:
     """Radiance image of a Lambertian sphere under the scene's lights: albedo / pi * E. Silhouette
-    pixels are point-sampled here but box-filtered by renderers: compare on ``sphere_hits().interior``."""
+    pixels are point-sampled here but box-filtered by renderers: compare on ``sphere_hits().interior``,
+    or with `box_filtered_lambert`."""
+    return lambert_radiance(scene, sphere_hits(scene), albedo).astype(np.float32)
+
+
+def lambert_radiance(scene: ProbeScene, hits: SphereHits, albedo: float | tuple[float, float, float] = 0.8
+                     ) -> np.ndarray:
+    """The radiance (…, 3) a Lambertian sphere of this albedo sends along ``hits``' rays (0 where they miss)."""
     from ..data.environment import radiance
 
-    hits = sphere_hits(scene)
     e = sum(point_light_irradiance(scene, hits, light)[0] for light in scene.point_lights)
     e = np.broadcast_to(np.asarray(e, dtype=np.float64)[..., None], (*hits.mask.shape, 3))
     env = scene.environment
@@ -118,7 +160,15 @@ def analytic_lambert(scene: ProbeScene, albedo: float | tuple[float, float, floa
         e = e + np.where(hits.mask[..., None],
                          environment_irradiance(radiance(env.map, env.scale, env.rotation), hits.normal), 0.0)
     rho = np.broadcast_to(np.asarray(albedo, dtype=np.float64), (3,))
-    return (e * rho / math.pi).astype(np.float32)
+    return e * rho / math.pi
+
+
+def box_filtered_lambert(scene: ProbeScene, albedo: float | tuple[float, float, float] = 0.8) -> np.ndarray:
+    """`analytic_lambert` as a renderer's box pixel filter makes it, silhouette included (`box_filtered`, 16 x 16
+    rays a pixel at the edge: under a rim light at 48 px, 4 x 4 leave its crescent 8.5 % from the exact filter;
+    16 x 16 leave Mitsuba 3.1 %, Cycles 4.0 % from it, each within its 64 spp noise)."""
+    k = 4 if scene.environment is not None else 16  # an environment lights the edge softly, at a map integral a ray
+    return box_filtered(scene, lambda hits: lambert_radiance(scene, hits, albedo), k).astype(np.float32)
 
 
 def _fresnel(cos_i: np.ndarray, eta: float) -> np.ndarray:

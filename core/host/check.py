@@ -1,26 +1,31 @@
 """`remap check`: the adapter contract run from the command line, for any adapter.
 
-Each check renders the probe and compares it with what the conventions say it must be: the
-white Lambertian sphere against the analytic radiance (and, when it is off, the factor: π, 2,
-4π ... name the usual mistakes), the image's orientation under an asymmetric light (a flip, or a
-shift by a pixel or half of one, named as such), bit-identical renders for one seed and different
-ones for two, lobes that sum to the full image, pixel precision and clipping. Every result is a
-row with what to fix, and a render that never ends is a row saying why it likely did not; nothing
-here names a renderer."""
+Each check renders the probe and compares it with what the conventions say it must be, judged by
+`core.host.judge` (which judges a user's images the same): the white Lambertian's pixels linear in the
+analytic radiance (a display curve named as such), equal to it (when off, the factor: π, 2, 4π ... name
+the usual mistakes), its orientation under an asymmetric light (a flip, or a shift by a pixel or half of
+one), no 8-bit levels in its gradient and no highlight clipped or rolled off under a bright light, its
+silhouette and a rim light's crescent integrated over each pixel's area (against a box-filtered analytic
+image: aliasing is the adapter's, not the renderers' disagreement); bit-identical renders for one seed and
+different ones for two, lobes that sum to the full image, a clear glass against its analytic image. Every
+result is a row with what to fix; a row whose cause another row names is not judged until that one
+passes; a render that never ends is a row saying why it likely did not. Nothing here names a renderer."""
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
+import dataclasses
 from typing import Callable
 
 import numpy as np
 
 from ..data.errors import RenderTimeoutError
 from ..data.imageio import HALF_EPS
-from ..data.metrics import beyond_noise, eight_bit, relative_rmse
+from ..data.metrics import beyond_noise, relative_rmse
 from ..data.scene import EnvironmentLight, PointLight, ProbeScene
+from . import judge
 from .analytic import analytic_glass, analytic_lambert, scene_for, sphere_hits
+from .judge import (FACTORS, FLIP_FIX, FLIPS, PLACEMENTS, SHIFT_FIX, SHIFTS, Row,  # noqa: F401 (the rows' names)
+                    placements, usual_factor)
 
 SCENE = ProbeScene(resolution=48, spp=16)
 CALIBRATION = ProbeScene(resolution=64, spp=64)
@@ -34,10 +39,6 @@ def _half(img: np.ndarray) -> bool:
     lit = np.asarray(img, np.float32)
     lit = lit[lit > 0]
     return bool(lit.size) and np.array_equal(lit, lit.astype(np.float16).astype(np.float32))
-FACTORS = {"π": math.pi, "1/π": 1 / math.pi, "2": 2.0, "1/2": 0.5, "4π": 4 * math.pi, "1/(4π)": 1 / (4 * math.pi),
-           "2π": 2 * math.pi, "1/(2π)": 1 / (2 * math.pi), "1/683 (lumens per watt)": 1 / 683.0,
-           "4π/683 (candela read as watts)": 4 * math.pi / 683.0}
-"""Scale errors with a usual cause: radiance against irradiance (π), power against intensity (4π)."""
 BRIGHT = 200.0
 """The intensity scale of the clipping check: the sphere's brightest pixels well above 1."""
 NOISY = ProbeScene(resolution=48, spp=4)
@@ -51,80 +52,47 @@ about 1e-2 under the probe light and more under an environment."""
 
 TITLES = {
     "images": "images: RGB float, finite, lit, black background",
+    "quantisation": "quantisation: no 8-bit levels in the probe's gradient",
+    "encoding": "encoding: linear radiance, no display curve",
     "units": "units: white Lambertian against the analytic radiance",
     "orientation": "orientation: an asymmetric light, left from right and up from down",
     "determinism": "determinism: one seed, the same image",
     "seed": "seed: two seeds, two images",
     "lobes": "lobes: diffuse + specular = the full image",
-    "precision": "precision: unclipped 32-bit float pixels",
+    "precision": "precision: highlights far above 1, unclipped",
+    "sampling": "sampling: the silhouette and a rim light, each pixel's area",
     "transmission": "transmission: a smooth glass against its analytic image",
 }
 """Every check's row name, in the order `run` runs them."""
 
 
-@dataclass(frozen=True)
-class Row:
-    name: str
-    passed: bool | None
-    """None: not run (what it needs is missing), which is not a pass."""
-    detail: str
-    fix: str = ""
-    by_design: bool = False
-    """A failure the adapter declares a property of its renderer (`Adapter.transmission_limit`)."""
+NO_WHITE = "declare one (see units)"
 
 
-def usual_factor(ratio: float) -> str:
-    """The usual factor a ratio is nearest to (within 3 %), or ""."""
-    name, value = min(FACTORS.items(), key=lambda kv: abs(math.log(ratio / kv[1])))
-    return name if abs(math.log(ratio / value)) < 0.03 else ""
+def _probe(render: Callable, white: tuple[str, dict]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The white Lambertian under the probe's light (`CALIBRATION`), its analytic image and the pixels inside
+    the sphere in every placement."""
+    img = np.asarray(render(white[0], white[1], CALIBRATION), np.float64)
+    return img, analytic_lambert(CALIBRATION, ALBEDO).astype(np.float64), inner_pixels(CALIBRATION)
+
+
+def encoding(render: Callable, white: tuple[str, dict] | None) -> Row:
+    """The white Lambertian's pixels as a power of the analytic radiance: linear, or a display curve."""
+    if white is None:
+        return Row(TITLES["encoding"], None, "no calibration material", NO_WHITE)
+    return _titled(judge.encoding(*_probe(render, white)))
 
 
 def calibration(render: Callable, white: tuple[str, dict] | None) -> Row:
-    name = TITLES["units"]
     if white is None:
-        return Row(name, None, "no calibration material", "declare a white diffuse material of albedo 0.8 "
+        return Row(TITLES["units"], None, "no calibration material", "declare a white diffuse material of albedo 0.8 "
                    "(a definition's `calibration: {model: ..., params: {...}}`)")
-    img = render(white[0], white[1], CALIBRATION)
-    inner = inner_pixels(CALIBRATION)
-    full = analytic_lambert(CALIBRATION, ALBEDO)
-    # Judged on the image as it would be placed right: a flipped or shifted image is orientation's
-    # failure, not a units factor (one row low read as "10.92 % off; 1.023x").
-    errors = placements(full, img, inner)
-    best = min(errors, key=errors.get)
-    err = errors[best]
-    if err < CALIBRATION_TOLERANCE:
-        placed = "" if best == "as expected" else f" with the image placed right (it is {best}: see orientation)"
-        return Row(name, True, f"{err:.2%} from the analytic radiance{placed}")
-    ratio = float(img[inner].sum() / max(full[inner].sum(), 1e-30))
-    known = usual_factor(ratio)
-    why = f"{err:.2%} off; the image is {ratio:.4g}x the analytic radiance" + (f" (a factor of {known})" if known else "")
-    return Row(name, False, why, "pixels are radiance (W m^-2 sr^-1); the light's intensity is radiant intensity in "
-               "W/sr (a power P in W is 4π·I); the diffuse BRDF is albedo/π; no tone mapping or 8-bit output "
-               "(see precision)")
+    return _titled(judge.units(*_probe(render, white), CALIBRATION_TOLERANCE))
 
 
-FLIPS = {"mirrored left-right": lambda a: a[:, ::-1], "upside down": lambda a: a[::-1, :],
-          "rotated half a turn": lambda a: a[::-1, ::-1], "transposed": lambda a: np.swapaxes(a, 0, 1)}
-
-
-def _moved(rows: int, columns: int, half: bool = False) -> Callable:
-    """An image moved ``rows`` down and ``columns`` right (half that: the mean of it and the image)."""
-    def move(a: np.ndarray) -> np.ndarray:
-        moved = np.roll(a, (rows, columns), axis=(0, 1))
-        return (a + moved) / 2 if half else moved
-    return move
-
-
-SHIFTS = {"shifted one row down": _moved(1, 0), "shifted one row up": _moved(-1, 0),
-           "shifted one column right": _moved(0, 1), "shifted one column left": _moved(0, -1),
-           "shifted half a row down": _moved(1, 0, True), "shifted half a row up": _moved(-1, 0, True),
-           "shifted half a column right": _moved(0, 1, True), "shifted half a column left": _moved(0, -1, True)}
-"""An image a pixel or half of one off (pixel centres at i or i + 1 instead of i + 0.5, a film with a
-border row): what it looks like, the analytic image moved so; half a pixel, as the mean of two rows."""
-PLACEMENTS = {"as expected": lambda a: a, **FLIPS, **SHIFTS}
-FLIP_FIX = "right-handed world, the camera looking down -z with +y up; image row 0 at the top, column 0 at the left"
-SHIFT_FIX = ("pixel centres at ((j + 0.5)/W, (i + 0.5)/H) of the image plane, row 0 at the top, column 0 at the "
-              "left: no border row or column, no half-pixel offset in the camera or the film")
+def _titled(row: Row) -> Row:
+    """A judgement's row under this check's title (`TITLES`)."""
+    return dataclasses.replace(row, name=TITLES[row.name])
 
 
 def _symmetric(mask: np.ndarray) -> np.ndarray:
@@ -139,32 +107,14 @@ def inner_pixels(scene: ProbeScene) -> np.ndarray:
     return m & np.roll(m, 1, 0) & np.roll(m, -1, 0) & np.roll(m, 1, 1) & np.roll(m, -1, 1)
 
 
-def placements(want: np.ndarray, img: np.ndarray, inner: np.ndarray, same_total: bool = False) -> dict[str, float]:
-    """How far the image is from the expected one placed each way (`PLACEMENTS`); with ``same_total``,
-    each placed at the image's total (so that a scale error, units' failure, does not hide the shape)."""
-    errors = {}
-    for k, f in PLACEMENTS.items():
-        placed = f(want)[inner]
-        if same_total:
-            placed = placed * float(img[inner].sum() / max(float(placed.sum()), 1e-30))
-        errors[k] = relative_rmse(placed, img[inner])
-    return errors
-
-
 def orientation(render: Callable, white: tuple[str, dict] | None) -> Row:
     """A light upper left in front (+x right, +y up in the image): which placement of the analytic
     image (as it is, flipped, shifted by a pixel or half of one) the render is nearest to."""
-    name = TITLES["orientation"]
     if white is None:
-        return Row(name, None, "no calibration material", "declare one (see units)")
+        return Row(TITLES["orientation"], None, "no calibration material", NO_WHITE)
     scene = SCENE.model_copy(update={"lights": [PointLight(theta=50.0, phi=150.0)]})
-    img = render(white[0], white[1], scene)
-    errors = placements(analytic_lambert(scene, ALBEDO), np.asarray(img, np.float64), inner_pixels(scene), same_total=True)
-    best = min(errors, key=errors.get)
-    if best == "as expected":
-        return Row(name, True, f"{errors[best]:.2%} from the expected image (scaled to its total)")
-    return Row(name, False, f"the image is {best} ({errors[best]:.2%} from that, {errors['as expected']:.2%} from "
-               "the expected one)", SHIFT_FIX if best in SHIFTS else FLIP_FIX)
+    img = np.asarray(render(white[0], white[1], scene), np.float64)
+    return _titled(judge.orientation(img, analytic_lambert(scene, ALBEDO), inner_pixels(scene)))
 
 
 def determinism(render: Callable, models: dict) -> Row:
@@ -218,6 +168,10 @@ def images(render: Callable, models: dict, environment: bool = True) -> Row:
     n = SCENE.resolution
     for model, spec in models.items():
         img = np.asarray(render(model, spec.complete({}), scene_for(spec, SCENE, environment)))
+        if img.shape == (n, n, 3) and not np.isfinite(img).all():
+            return Row(name, False, f"model {model}: {int((~np.isfinite(img)).any(axis=-1).sum())} pixels are not "
+                       "finite (NaN or infinity)", "a pixel filter or a division that can reach 0 (a normalised "
+                       "filter's weights, pow of a negative, 0/0 at the sphere's edge): clamp, or filter with a box")
         if img.shape != (n, n, 3) or not np.isfinite(img).all() or img.max() <= 0:
             top = float(np.nanmax(img)) if img.size and not np.isnan(img).all() else float("nan")
             return Row(name, False, f"model {model}: shape {img.shape}, max {top:.3g}",
@@ -247,28 +201,54 @@ def lobes(render: Callable, models: dict) -> Row:
     return Row(name, True, f"{checked} model(s) with two lobes" if checked else "no model with two lobes")
 
 
-def precision(render: Callable, white: tuple[str, dict] | None) -> Row:
-    """Clipping at 1 (an 8-bit image) under a light bright enough to exceed it, and half floats."""
-    name = TITLES["precision"]
+def quantisation(render: Callable, white: tuple[str, dict] | None) -> Row:
+    """The probe's gradient (the analytic image draws it in 1845 values) in few levels: 8-bit output, however
+    scaled, decoded or curved after (what units, encoding and orientation would misread)."""
     if white is None:
-        return Row(name, None, "no calibration material", "declare one (see units)")
+        return Row(TITLES["quantisation"], None, "no calibration material", NO_WHITE)
+    probe, want, _ = _probe(render, white)
+    levels = judge.quantised(probe, want)
+    if levels:
+        return Row(TITLES["quantisation"], False, f"the probe: {levels}", judge.FLOAT_FIX)
+    lit = probe.max(axis=-1) > 0
+    return Row(TITLES["quantisation"], True, f"the probe's {int(lit.sum())} lit pixels in "
+               f"{np.unique(probe[lit]).size} values")
+
+
+def precision(render: Callable, white: tuple[str, dict] | None) -> Row:
+    """A light `BRIGHT` times the probe's: its brightest pixel against the analytic one (clipped at a
+    plateau, or rolled off by a tone curve or clamped samples), and half floats."""
+    if white is None:
+        return Row(TITLES["precision"], None, "no calibration material", NO_WHITE)
     light = SCENE.point_lights[0]
     scene = SCENE.model_copy(update={"lights": [light.model_copy(update={"intensity": light.intensity * BRIGHT})]})
     img = np.asarray(render(white[0], white[1], scene), np.float32)
-    want = analytic_lambert(scene, ALBEDO)
-    top = float(img.max())
-    if float(want.max()) > 1.5 and top <= 1.0 + 1e-6:
-        return Row(name, False, f"no pixel above {top:.3g} where the brightest should be {float(want.max()):.3g}: "
-                   "clipped", "write float EXR, PFM or HDR (an 8-bit PNG clips highlights at 1)")
-    levels = eight_bit(np.minimum(render(white[0], white[1], SCENE), 1.0))
-    if levels:
-        return Row(name, False, f"every pixel is one of 256 {levels} levels: an 8-bit image",
-                   "write float EXR, PFM or HDR")
-    if _half(img):
-        return Row(name, True, f"brightest {top:.3g} (expected {float(want.max()):.3g}); every pixel is a half float: "
-                   f"they round at {HALF_EPS:.2%}, far below the render noise and the fit's steps, so they pass",
-                   "32-bit float pixels, where the renderer can write them, leave nothing to round")
-    return Row(name, True, f"brightest {top:.3g} (expected {float(want.max()):.3g})")
+    row = _titled(judge.bright(img, analytic_lambert(scene, ALBEDO), where=f"under {BRIGHT:g}x the light: "))
+    if row.passed and _half(img):
+        return dataclasses.replace(row, detail=f"{row.detail}; every pixel is a half float: they round at "
+                                   f"{HALF_EPS:.2%}, far below the render noise and the fit's steps, so they pass",
+                                   fix="32-bit float pixels, where the renderer can write them, leave nothing to round")
+    return row
+
+
+SAMPLED = {"grazing light": 80.0, "rim light": 120.0}
+"""The sampling check's point lights (theta from the view): the one skims the sphere, the other lights a crescent
+on its silhouette; rendered at `SAMPLING` (64 spp: a path tracer's rim within 4 % of the exact filter)."""
+SAMPLING = ProbeScene(resolution=48, spp=64)
+
+
+def sampling(render: Callable, white: tuple[str, dict] | None) -> Row:
+    """The silhouette and a rim light's crescent against the box-filtered analytic image (two seeds: beyond
+    their noise): pixels integrated over their area, or one sample at each centre (aliased), which a fit would
+    read as the material, and a floor as the renderers' disagreement."""
+    if white is None:
+        return Row(TITLES["sampling"], None, "no calibration material", NO_WHITE)
+    scenes = {k: SAMPLING.model_copy(update={"lights": [PointLight(theta=t)]}) for k, t in SAMPLED.items()}
+    images = {}
+    for label, scene in scenes.items():
+        a, b = (np.asarray(render(white[0], white[1], scene.with_(seed=s)), np.float64) for s in (0, 1))
+        images[label] = ((a + b) / 2, relative_rmse(a, b) / 2)
+    return _titled(judge.sampling(images, scenes))
 
 
 GLASS = ProbeScene(lights=[EnvironmentLight(type="environment", map="studio")], resolution=48, spp=256)
@@ -306,28 +286,61 @@ HANG_FIX = ("the renderer likely does not honour the sample count it is given (a
             "that is only slow needs a longer `timeout`")
 
 
+NEEDS = {"units": ("quantisation", "encoding"), "orientation": ("quantisation", "encoding"),
+         "precision": ("units",), "sampling": ("units", "orientation")}
+"""A row judged only where the row it names passed (else its failure would be that row's cause read again:
+a display curve read as a units factor and a shift, a units factor as aliasing)."""
+
+
+def _remembered(render: Callable) -> Callable:
+    """``render`` with the white Lambertian's probe rendered once for the rows that judge it (encoding,
+    units, precision); every other render as it comes (determinism and seed render twice on purpose)."""
+    kept: dict = {}
+
+    def once(model, params, scene, lobe=None):
+        if scene is not CALIBRATION:
+            return render(model, params, scene, lobe)
+        key = (model, repr(sorted(params.items())), lobe)
+        if key not in kept:
+            kept[key] = render(model, params, scene, lobe)
+        return kept[key]
+    return once
+
+
 def run(render: Callable, models: dict, white: tuple[str, dict] | None, glass: tuple[str, dict] | None = None,
         environment: bool = False, transmission_limit: str = "") -> list[Row]:
     """Every check (`TITLES`); ``render(model, params, scene, lobe=None) -> image``. A check one of
     whose renders did not finish (`RenderTimeoutError`) is a failed row with the likely cause, and the
-    checks after it do not run (each would wait as long)."""
-    checks = {"images": lambda: images(render, models, environment),
+    checks after it do not run (each would wait as long); a check whose prerequisite failed (`NEEDS`) is
+    not judged."""
+    render = _remembered(render)
+    rows: dict[str, Row] = {}
+    checks = {"images": lambda: images(render, models, environment), "encoding": lambda: encoding(render, white),
               "units": lambda: calibration(render, white), "orientation": lambda: orientation(render, white),
               "determinism": lambda: determinism(render, models), "seed": lambda: seed(render, white, environment),
-              "lobes": lambda: lobes(render, models), "precision": lambda: precision(render, white),
+              "lobes": lambda: lobes(render, models),
+              "precision": lambda: precision(render, white), "quantisation": lambda: quantisation(render, white),
+              "sampling": lambda: sampling(render, white),
               "transmission": lambda: transmission(render, models, glass, environment, transmission_limit)}
-    rows: list[Row] = []
     stopped: str | None = None  # why the checks left do not run
-    for key, check in checks.items():
+    blocked: set[str] = set()  # rows not judged for a prerequisite's failure (`NEEDS`), and so theirs
+    for key in TITLES:
+        check = checks[key]
+        failed = [n for n in NEEDS.get(key, ()) if rows[n].passed is False or n in blocked]
         if stopped is not None:
-            rows.append(Row(TITLES[key], None, f"not run: {stopped}"))
+            rows[key] = Row(TITLES[key], None, f"not run: {stopped}")
+            continue
+        if failed:
+            blocked.add(key)
+            rows[key] = Row(TITLES[key], None, f"not judged: {' and '.join(failed)} did not pass, whose cause "
+                            "would be read again here")
             continue
         try:
-            row = check()
+            rows[key] = check()
         except RenderTimeoutError as exc:
-            row = Row(TITLES[key], False, f"a render did not finish in {exc.seconds:g} s (it was stopped)", HANG_FIX)
+            rows[key] = Row(TITLES[key], False, f"a render did not finish in {exc.seconds:g} s (it was stopped)",
+                            HANG_FIX)
             stopped = f"a render did not finish (see {key})"
-        if key == "images" and not row.passed:  # the others index the image: not run rather than failed on its shape
+        if key == "images" and not rows[key].passed:  # the others index the image: not run rather than failed
             stopped = stopped or "the images are not right (see images)"
-        rows.append(row)
-    return rows
+    return list(rows.values())

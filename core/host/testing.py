@@ -10,6 +10,8 @@ import numpy as np
 
 from . import check
 from .analytic import (
+    box_filtered,
+    box_filtered_lambert,
     SphereHits,
     analytic_glass,
     analytic_lambert,
@@ -102,6 +104,12 @@ class AdapterContract:
 
     def test_orientation(self):
         self._holds(check.orientation(self._render, self._white()))
+
+    def test_encoding(self):
+        self._holds(check.encoding(self._render, self._white()))
+
+    def test_sampling(self):
+        self._holds(check.sampling(self._render, self._white()))
 
     def test_determinism(self):
         self._holds(check.determinism(self._render, self.adapter.models))

@@ -12,7 +12,7 @@ from brdfremap.adapters.subprocess.adapter import adapter_class
 from brdfremap.core.data.errors import ConfigError, RenderError
 from brdfremap.core.data.metrics import relative_rmse
 from brdfremap.core.data.scene import ProbeScene
-from brdfremap.core.testing import analytic_lambert
+from brdfremap.core.testing import analytic_lambert, box_filtered_lambert
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "renderers"
 SCENE = ProbeScene(resolution=32, spp=4)
@@ -53,7 +53,7 @@ def test_a_models_text_carries_its_values_into_a_brace_language(tmp_path):
     """New user's item 1 and 2: {p_albedo} inside template_vars is filled (RGB through rgb_format),
     and {{ }} write the scene language's own braces."""
     img = _render(_definition(tmp_path))
-    want = analytic_lambert(SCENE, np.array([0.2, 0.4, 0.6], np.float32))
+    want = box_filtered_lambert(SCENE, np.array([0.2, 0.4, 0.6], np.float32))
     assert relative_rmse(want, img) < 1e-5
 
 
@@ -96,7 +96,7 @@ def test_no_image_where_asked_lists_what_the_renderer_did_write(tmp_path):
 def test_radiance_hdr_is_read(tmp_path):
     """Item 6: .hdr was refused as an output format."""
     img = _render(_definition(tmp_path, output="hdr"))
-    want = analytic_lambert(SCENE, np.array([0.2, 0.4, 0.6], np.float32))
+    want = box_filtered_lambert(SCENE, np.array([0.2, 0.4, 0.6], np.float32))
     assert relative_rmse(want, img) < 0.01  # RGBE: an 8-bit mantissa
 
 

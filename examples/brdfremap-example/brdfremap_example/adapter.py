@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from brdfremap.core import Adapter, Appearance, LobeSpec, Model, ParamSpec, ProbeScene
-from brdfremap.core.testing import point_light_irradiance, sphere_hits
+from brdfremap.core.testing import box_filtered, point_light_irradiance
 
 class Toy(Model):
     """The toy model in one place: its parameters (below) and its neutral reading, which gives a
@@ -55,9 +55,14 @@ class ToyAdapter(Adapter):
         self.calls = 0
 
     def render(self, model, params, scene: ProbeScene, lobe=None):
+        """The sphere shaded along each pixel's ray, and near the silhouette averaged over the pixel's area
+        (`box_filtered`: a renderer's box pixel filter; one ray at each centre fails `remap check`'s sampling)."""
         self.calls += 1
         p = self.as_model(model).with_lobe(params, lobe)  # the tool passes the model; a script may name it
-        hits = sphere_hits(scene)
+        return box_filtered(scene, lambda hits: self._shade(p, scene, hits)).astype(np.float32)
+
+    @staticmethod
+    def _shade(p, scene: ProbeScene, hits):
         a = p["alpha"]
         image = np.zeros((*hits.mask.shape, 3))
         for light in scene.point_lights:  # the lights add up
@@ -68,4 +73,4 @@ class ToyAdapter(Adapter):
             tan2 = (1 - cos_h**2) / cos_h**2
             spec = p["specular"] * np.exp(-tan2 / a**2) / (math.pi * a**2 * cos_h**4) / 4
             image += (np.asarray(p["diffuse"]) / math.pi + spec[..., None]) * e[..., None]
-        return image.astype(np.float32)
+        return image

@@ -14,7 +14,7 @@ import numpy as np
 
 def image(scene_doc, albedo):
     from brdfremap.core.data.scene import Camera, PointLight, ProbeScene, Sphere
-    from brdfremap.core.testing import analytic_lambert
+    from brdfremap.core.testing import box_filtered_lambert
 
     cam, light = scene_doc["camera"], scene_doc["light"]
     # Rebuild a ProbeScene from the resolved document (camera on +z of its target, as the probe has).
@@ -27,7 +27,7 @@ def image(scene_doc, albedo):
         light=PointLight(r=r, theta=float(np.degrees(np.arccos(lp[2] / r))),
                          phi=float(np.degrees(np.arctan2(lp[1], lp[0]))), intensity=light["intensity"]),
         resolution=scene_doc["width"], spp=scene_doc["spp"], seed=scene_doc["seed"])
-    return analytic_lambert(scene, albedo)
+    return box_filtered_lambert(scene, albedo)  # a pixel integrates its area, as a renderer's box filter does
 
 
 def write(path, pixels):

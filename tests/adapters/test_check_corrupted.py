@@ -1,0 +1,93 @@
+"""`remap check` against four adapters that corrupt every fit and passed it before (issue 55): each is the
+white Lambertian a correct renderer draws (the box-filtered analytic image), corrupted as a newcomer's
+adapter was, and the row that must fail says the cause and the fix; the rows whose cause it is are not
+read again as another (a display curve as a units factor and a shift)."""
+
+import numpy as np
+import pytest
+
+from brdfremap.core.data.schemas import ModelSpec, ParamSpec
+from brdfremap.core.host import check, judge
+from brdfremap.core.testing import analytic_lambert, box_filtered_lambert
+
+MODELS = {"lambert": ModelSpec(name="lambert", parameters=(ParamSpec(name="albedo", kind="rgb", default=(0.5,) * 3),))}
+WHITE = ("lambert", {"albedo": (0.8, 0.8, 0.8)})
+
+
+def _srgb(x):
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(np.maximum(x, 0.0031308), 1 / 2.4) - 0.055)
+
+
+def _eight_bit(x, exposure=1.0):
+    """An 8-bit exposure read back and undone: clipped at 1/exposure, 256 levels of it."""
+    return np.round(np.clip(x * exposure, 0, 1) * 255) / 255 / exposure
+
+
+CORRUPT = {
+    "correct": lambda scene, a: box_filtered_lambert(scene, a),
+    "clipped at 4": lambda scene, a: np.minimum(box_filtered_lambert(scene, a), 4.0),
+    "8-bit at 1/64": lambda scene, a: _eight_bit(box_filtered_lambert(scene, a), 1 / 64),
+    "8-bit sRGB, not linearised": lambda scene, a: _eight_bit(_srgb(box_filtered_lambert(scene, a))),
+    "one ray at each pixel's centre": lambda scene, a: analytic_lambert(scene, a),
+}
+
+
+def _rows(kind: str) -> dict[str, judge.Row]:
+    def render(model, params, scene, lobe=None):
+        return np.asarray(CORRUPT[kind](scene, np.asarray(params["albedo"], np.float64)), np.float32)
+    return {key: row for key, row in zip(check.TITLES, check.run(render, MODELS, WHITE))}
+
+
+def _failed(rows: dict[str, judge.Row]) -> list[str]:
+    return [k for k, r in rows.items() if r.passed is False]
+
+
+def test_the_correct_renderer_passes_every_row():
+    rows = _rows("correct")
+    assert _failed(rows) == [] and all(r.passed for r in rows.values()), rows
+
+
+def test_highlights_clipped_at_4_fail_precision_and_nothing_else():
+    """It passed: `brightest 4 (expected 149)`; its gold was then "67.6 %, a model mismatch"."""
+    rows = _rows("clipped at 4")
+    assert _failed(rows) == ["precision"], rows
+    assert "the brightest pixel is 4 where it should be 149" in rows["precision"].detail, rows["precision"]
+    assert "(clipped)" in rows["precision"].detail and "float" in rows["precision"].fix
+
+
+def test_an_8_bit_exposure_at_1_64_is_named_quantised_not_a_units_factor():
+    """It passed precision ("brightest 64") and failed units at "1.001x", pointing to precision."""
+    rows = _rows("8-bit at 1/64")
+    assert "quantisation" in _failed(rows) and "units" not in _failed(rows), rows
+    detail = rows["quantisation"].detail
+    assert "its lit pixels take 3 values where the analytic gradient has" in detail, detail
+    assert "8-bit (3 levels 0.251 apart, scaled after)" in detail, detail
+    assert rows["units"].passed is None and "quantisation" in rows["units"].detail and "did not pass" in rows["units"].detail, rows["units"]
+    assert rows["orientation"].passed is None
+
+
+def test_srgb_output_is_named_encoded_and_8_bit_not_a_shift_or_a_units_factor():
+    """It read "units 1.875x", "shifted one column right", "clipped"; no row said sRGB."""
+    rows = _rows("8-bit sRGB, not linearised")
+    assert set(_failed(rows)) == {"quantisation", "encoding"}, rows
+    power = float(rows["encoding"].detail.split("to the power ")[1].split(",")[0])
+    assert 0.4 < power < 0.6 and "gamma- or sRGB-encoded" in rows["encoding"].detail, rows["encoding"]
+    assert "(levels k/255, as an 8-bit image reads)" in rows["quantisation"].detail, rows["quantisation"]
+    assert all(rows[k].passed is None for k in ("units", "orientation", "precision", "sampling")), rows
+
+
+def test_one_ray_at_each_pixel_centre_fails_sampling_as_the_adapters_aliasing():
+    """Every row passed; under the rim light it is far from a box-filtered image, which the remaps booked as
+    the renderers' disagreement."""
+    rows = _rows("one ray at each pixel's centre")
+    assert _failed(rows) == ["sampling"], rows
+    detail = rows["sampling"].detail
+    assert detail.startswith("rim light: ") and "from it sampled at each pixel's centre: one sample a pixel" in detail
+    far = float(detail.split("(")[1].split("%")[0]) / 100
+    assert far > 3 * judge.SAMPLING_TOLERANCE, detail  # far from the threshold, not a hair over it
+    assert "integrate each pixel over its area" in rows["sampling"].fix
+
+
+@pytest.mark.parametrize("kind", ["correct", "clipped at 4"])
+def test_the_remap_check_table_has_every_row_in_order(kind):
+    assert list(_rows(kind)) == list(check.TITLES)
