@@ -33,7 +33,7 @@ QUANTITIES: dict[str, tuple[str, Callable[[Appearance], Any], str]] = {
     "distribution": (TEXT, lambda a: a.distribution, "beckmann or ggx (none where the source names none)"),
     "specular": (COLOUR, lambda a: a.specular, "the specular lobe's normal-incidence reflectance F0"),
     "diffuse": (COLOUR, lambda a: a.diffuse, "the diffuse albedo"),
-    "base_color": (COLOUR, lambda a: a.specular if a.kind == Kind.CONDUCTOR else a.opaque_base(),
+    "base_color": (COLOUR, lambda a: a.base_color(),
                    "a metal's F0, else the diffuse albedo before transmission (glTF's and Blender's Base Color)"),
     "ior": (NUMBER, lambda a: a.dielectric_ior(), "a dielectric's IOR: as read, else the one of its mean F0"),
     "eta": (COLOUR, lambda a: a.conductor_ior()[0], "a conductor's complex IOR, real part: as read, else one "

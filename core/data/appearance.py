@@ -112,8 +112,18 @@ class Appearance(_Strict):
             out[need] = f"its diffuse lobe is {_DIFFUSE_NAMES[self.diffuse_model]}, not Lambert's"
         return out
 
+    def base_color(self) -> RGB:
+        """The colour a base-colour model (glTF's, Blender's Principled, three.js's) shows: a metal's F0 (its
+        ``specular``, else from its complex IOR), else the diffuse base before transmission (`opaque_base`)."""
+        if self.kind != Kind.CONDUCTOR:
+            return self.opaque_base()
+        if max(self.specular) > 0.0 or self.eta is None or self.k is None:
+            return self.specular
+        return conductor_f0(self.eta, self.k)
+
     def opaque_base(self) -> RGB:
-        """The base colour whose untransmitted part is the diffuse albedo (a Principled BSDF's)."""
+        """A dielectric's base colour whose untransmitted part is the diffuse albedo (a Principled BSDF's); a
+        metal's is `base_color`."""
         keep = 1.0 - self.transmission
         return tuple(c / keep for c in self.diffuse) if 0.0 < keep < 1.0 else self.diffuse  # type: ignore
 

@@ -124,6 +124,27 @@ class RenderersFloor(_Note):
                 "their difference, not the material's")
 
 
+class AdapterOff(_Finding):
+    """Under one held-out condition an adapter draws even a white Lambertian away from its box-filtered
+    analytic image (aliasing at the silhouette, a light drawn otherwise): the difference between the two
+    renderers there is that adapter's fault, which `remap check` names, so it is not subtracted from the
+    material's error as the renderers' floor."""
+
+    kind: Literal["adapter_off"] = "adapter_off"
+    condition: Lighting
+    label: str
+    adapter: str
+    error: float = Field(description="The adapter's white Lambertian's relative RMSE from the box-filtered "
+                                     "analytic image there, beyond its noise.")
+    renderers: float = Field(description="The two renderers' white Lambertians' difference there, beyond the noise.")
+
+    def sentence(self) -> str:
+        return (f"under the {self.label} adapter {self.adapter!r} draws a white Lambertian {self.error:.1%} from its "
+                f"box-filtered analytic image (`remap check {self.adapter}`: sampling): the renderers' "
+                f"{self.renderers:.1%} difference there is that adapter's fault, not subtracted from the material's "
+                "error; fix the adapter")
+
+
 class RenderersDisagree(_Finding):
     """The two renderers draw this kind of material otherwise under one condition: its error there is
     theirs, not the model's (`core.job.agreement`)."""
@@ -567,6 +588,7 @@ class InputsTried(_Note):
 
 
 FINDINGS = (ErrorAboveThreshold, ModelMismatch, TableMismatch, HeldOutAbove, RenderersDisagree, RenderersFloor,
+            AdapterOff,
             TransportUnchecked, CannotResolve, ImagePrecision, NoEffect, IllConditioned, NotAtMinimum,
             PinnedOnBound, RendererAlters, ValidationSkipped, NothingFitted, TableLookup, TexturedAbove, TexturedNotes,
             StartKept, ChoiceTried, SmoothHeld, SchemeChosen, DeadParameters,

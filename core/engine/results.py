@@ -76,6 +76,10 @@ class Disagreement(Strict):
     error: float
     noise_floor: float
     beyond_noise: float
+    own: str = Field("", description="An adapter whose white Lambertian there is itself off its box-filtered "
+                                     "analytic image (`remap check`'s sampling row): the difference is its fault, "
+                                     "not a floor; empty where both draw it right or it was not measured.")
+    own_error: float = Field(0.0, description="That adapter's white Lambertian's error beyond its noise there.")
 
 
 @dataclass

@@ -28,6 +28,7 @@ from ..data.findings import (
     RendererAlters,
     RenderersDisagree,
     RenderersFloor,
+    AdapterOff,
     TransportUnchecked,
     ValidationSkipped,
     Verdict,
@@ -104,6 +105,10 @@ def _errors(ev: Evidence) -> list:
             out.append(_disagree(theirs[c.condition], c.error if c.beyond_noise > ev.threshold else None))
         elif c.beyond_noise > ev.threshold:
             floor = ev.agreement.floors.get(c.condition)
+            if floor is not None and floor.own:  # an adapter's own fault there: said, and no floor
+                out.append(AdapterOff(condition=c.condition, label=c.label, adapter=floor.own, error=floor.own_error,
+                                      renderers=floor.beyond_noise))
+                floor = None
             pair = floor.beyond_noise if floor is not None else 0.0
             far = beyond_noise(c.beyond_noise, pair)
             if far > ev.threshold or floor is None:

@@ -189,6 +189,31 @@ def _refract(d: np.ndarray, n: np.ndarray, eta: float) -> np.ndarray:
     return d / eta + (cos_i / eta - np.sqrt(np.clip(k, 0.0, None))) * n
 
 
+def analytic_mirror(scene: ProbeScene, supersample: int = 6) -> np.ndarray:
+    """Radiance image of a perfect mirror sphere (reflectance 1 at every angle) under the scene's environment:
+    along each ray, the environment in the reflected direction. Point lights show in it as points: they add
+    nothing. Pixels are averaged over ``supersample``² rays (a renderer's box filter)."""
+    from ..data.environment import lookup, radiance
+
+    env = scene.environment
+    if env is None:
+        return np.zeros((scene.resolution, scene.resolution, 3), np.float32)
+    px = radiance(env.map, env.scale, env.rotation)
+
+    def shade(hits: SphereHits) -> np.ndarray:
+        d = -hits.view
+        cos_i = np.clip(-(d * hits.normal).sum(-1, keepdims=True), 0.0, 1.0)
+        return np.where(hits.mask[..., None], lookup(px, d + 2.0 * cos_i * hits.normal), 0.0)
+    n, k = scene.resolution, supersample
+    offsets = (np.arange(k) + 0.5) / k
+    idx = np.arange(n, dtype=np.float64)
+    xx = idx[None, :, None, None] + offsets[None, None, None, :]
+    yy = idx[:, None, None, None] + offsets[None, None, :, None]
+    xx, yy = np.broadcast_to(xx, (n, n, k, k)), np.broadcast_to(yy, (n, n, k, k))
+    eye, d = _directions(scene, xx, yy)
+    return shade(_surface(scene, eye, d)).mean(axis=(2, 3)).astype(np.float32)
+
+
 def analytic_glass(scene: ProbeScene, ior: float = 1.5, supersample: int = 3, bounces: int = 8) -> np.ndarray:
     """Radiance image of a perfectly smooth, clear glass sphere (relative IOR ``ior``) under the
     scene's environment: its Fresnel reflection, and the light through it after 0 to ``bounces``

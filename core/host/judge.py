@@ -161,7 +161,7 @@ def quantised(img: np.ndarray, want: np.ndarray | None = None) -> str:
     img = np.asarray(img, np.float64)
     lit = img.max(axis=-1) > 0
     values = np.unique(img[lit])
-    step = _one_step(values) if lit.sum() >= 1024 else None
+    step = _one_step(values) if np.count_nonzero(img > 0) >= 1024 else None  # lit values, every channel
     kind = eight_bit(img)
     named = {"linear": "levels k/255, as an 8-bit image reads", "sRGB": "sRGB-decoded 8-bit levels"}
     how = named.get(kind, "") or (f"{values.size} levels {step:.4g} apart, scaled after" if step else "")

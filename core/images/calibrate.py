@@ -13,21 +13,17 @@ import numpy as np
 
 from ..data.errors import ConfigError
 
-from ..data.metrics import beyond_noise, clipped_at, eight_bit, relative_rmse
-from ..host.analytic import analytic_lambert
-from ..host.check import FLIP_FIX, PLACEMENTS, SHIFT_FIX, SHIFTS, usual_factor, inner_pixels, placements, Row
+from ..data.metrics import beyond_noise, clipped_at, relative_rmse
+from ..host import judge
+from ..host.analytic import analytic_lambert, box_filtered_lambert
+from ..host.check import inner_pixels
+from ..host.judge import Row
 from .exported import ALBEDO, CALIBRATION, Shot
-from ..data.scene import ProbeScene
-from .folder import ImageFolder, downsampled
+from .folder import ImageFolder
 
 UNITS_TOLERANCE = 0.02
 """The calibration's probe within this of the analytic radiance beyond its noise (Mitsuba from its exported
 XML: 0.3 %; Cycles from the exported USD: see docs/images.md)."""
-GAMMA_TOLERANCE = 0.08
-"""The pixels go as the radiance to a power further than this from 1: an encoded image (sRGB: about 0.45)."""
-BRIGHT_TOLERANCE = 0.9
-"""The bright shot's brightest pixel at least this fraction of its analytic value: a renderer that clamps
-samples or rolls highlights off below it would cut a material's highlights as well."""
 CONDITION_TOLERANCE = 0.10
 """A point-light condition further than this beyond its noise from the analytic image: the renderer draws
 that light otherwise (a grazing or rim light a renderer places or samples wrong), which no fit can absorb."""
@@ -51,19 +47,6 @@ def _basic(name: str, img: np.ndarray) -> str | None:
     return None
 
 
-def quantized(img: np.ndarray) -> tuple[int, float] | None:
-    """(levels, step) where the lit pixels take at most 256 values, all whole multiples of one step: an 8-bit
-    image, whatever it was scaled by after (an exposure undone); float renders take nearly one value a pixel."""
-    lit = np.asarray(img, np.float64)
-    lit = lit[lit > 0]
-    levels = np.unique(lit)
-    if lit.size < 1024 or not 2 <= levels.size <= 256:
-        return None
-    step = float(np.diff(np.concatenate([[0.0], levels])).min())
-    ratio = levels / step
-    return (int(levels.size), step) if np.allclose(ratio, np.round(ratio), atol=1e-3) else None
-
-
 def image_rows(folder: ImageFolder) -> list[Row]:
     """What any image must be (the calibration's or a material's): finite, non-negative, a black
     background, not clipped at 1, not 8-bit."""
@@ -75,55 +58,13 @@ def image_rows(folder: ImageFolder) -> list[Row]:
             if why:
                 return [Row("images", False, why, "render the sphere alone: no world light seen by the camera, no "
                             "denoiser, no post-processing")]
-            clip, levels, steps = clipped_at(img), eight_bit(img), quantized(img)
-            words = ([f"every pixel one of 256 {levels} levels (8-bit)"] if levels else [
-                f"every lit pixel one of {steps[0]} levels {steps[1]:.4g} apart (8-bit, scaled)"] if steps else []) + (
-                [f"{clip[1]} pixels at exactly {clip[0]:.4g} (clipped)"] if clip and not steps else [])
+            clip, levels = clipped_at(img), judge.quantised(img)
+            words = ([levels] if levels else []) + (
+                [f"{clip[1]} pixels at exactly {clip[0]:.4g} (clipped)"] if clip and not levels else [])
             if words:
                 return [Row("precision", False, f"{path.name}: {' and '.join(words)}", "write 32-bit or half float "
                             "EXR: no 8-bit output, no tone curve or view transform that stops at 1")]
     return out
-
-
-def _encoding(img: np.ndarray, want: np.ndarray, inner: np.ndarray) -> Row | None:
-    """The power the pixels go as of the radiance (a log-log line through the lit interior): an encoded
-    image (sRGB, a display gamma) is named as such, not as a units factor or a shift."""
-    errors = placements(want, img, inner, same_total=True)
-    want = PLACEMENTS[min(errors, key=errors.get)](want)  # a flipped image's curve, as it lies
-    lit = inner & (want.mean(axis=2) > 0.02 * want.max()) & (img.mean(axis=2) > 0)
-    if lit.sum() < 16:
-        return None
-    x, y = np.log(want[lit].mean(axis=1)), np.log(img[lit].mean(axis=1))
-    power = float(np.polyfit(x, y, 1)[0])
-    if abs(power - 1.0) <= GAMMA_TOLERANCE:
-        return None
-    return Row("encoding", False, f"probe: the pixels go as the radiance to the power {power:.2f}, not 1: "
-               f"{'gamma- or sRGB-encoded (a display curve)' if power < 1 else 'a curve applied, or not the white Lambertian of albedo 0.8 the export holds'}",
-               "write linear radiance: no view transform or display curve (Blender: Standard; other renderers: "
-               "linear, raw or scene-referred output), no gamma")
-
-
-def _units(img: np.ndarray, noise: float | None, want: np.ndarray, inner: np.ndarray) -> Row:
-    errors = placements(want, img, inner)
-    best = min(errors, key=errors.get)
-    far = beyond_noise(errors[best], noise or 0.0)
-    if far < UNITS_TOLERANCE:
-        return Row("units", True, f"probe: {errors[best]:.2%} from the analytic radiance ({far:.2%} beyond the noise)")
-    ratio = float(img[inner].sum() / max(float(want[inner].sum()), 1e-30))
-    known = usual_factor(ratio)
-    said = f" (a factor of {known})" if known else ""
-    return Row("units", False, f"probe: {errors[best]:.2%} from the analytic radiance; the image is {ratio:.4g}x it"
-               f"{said}", "pixels are radiance (W m^-2 sr^-1): no exposure or gain; a point light's intensity is "
-               "radiant intensity in W/sr (a power P in W is 4π·I); the calibration material's albedo is 0.8")
-
-
-def _orientation(img: np.ndarray, want: np.ndarray, inner: np.ndarray) -> Row:
-    errors = placements(want, img, inner, same_total=True)
-    best = min(errors, key=errors.get)
-    if best == "as expected":
-        return Row("orientation", True, f"probe: {errors[best]:.2%} from the expected image (scaled to its total)")
-    return Row("orientation", False, f"probe: the image is {best} ({errors[best]:.2%} from that, "
-               f"{errors['as expected']:.2%} from the expected one)", SHIFT_FIX if best in SHIFTS else FLIP_FIX)
 
 
 def _bright(folder: ImageFolder) -> Row | None:
@@ -134,12 +75,7 @@ def _bright(folder: ImageFolder) -> Row | None:
         return Row("precision", False, "no image of the bright shot", "render bright.seed0.exr and .seed1.exr of the "
                    "calibration material: it shows whether highlights clip")
     img, _ = _pair(folder, shot)
-    want = analytic_lambert(shot.scene, ALBEDO)
-    top, expected = float(img.max()), float(want.max())
-    if top < BRIGHT_TOLERANCE * expected:
-        return Row("precision", False, f"bright: the brightest pixel is {top:.3g} where it should be {expected:.3g}: "
-                   "clipped or compressed", "write float EXR with no tone curve (highlights far above 1 are kept)")
-    return Row("precision", True, f"bright: brightest {top:.3g} (expected {expected:.3g})")
+    return judge.bright(img, analytic_lambert(shot.scene, ALBEDO), where="bright: ")
 
 
 def _seeds(folder: ImageFolder) -> Row | None:
@@ -151,26 +87,15 @@ def _seeds(folder: ImageFolder) -> Row | None:
     return None
 
 
-SUPERSAMPLE = 4
-"""The analytic image a condition is judged against is box-filtered from this many times its resolution (a
-renderer's box pixel filter): a rim light's crescent is a few pixels, point-sampled 25 % off at 48 px."""
-
-
-def filtered_lambert(scene: ProbeScene) -> np.ndarray:
-    """The white Lambertian's analytic image as a box pixel filter makes it, silhouette included."""
-    fine = analytic_lambert(scene.with_(resolution=scene.resolution * SUPERSAMPLE), ALBEDO)
-    return downsampled(fine, scene.resolution, scene.name)
-
-
 def _conditions(folder: ImageFolder) -> list[Row]:
-    """Each shot but the probe's against its box-filtered analytic image (`filtered_lambert`, silhouette
+    """Each shot but the probe's against its box-filtered analytic image (`box_filtered_lambert`, silhouette
     included): what the renderer draws of that light, and how it samples the sphere's edge."""
     out = []
     for shot in folder.given:
         if shot.name in ("probe", "bright"):
             continue
         img, noise = _pair(folder, shot)
-        err = relative_rmse(filtered_lambert(shot.scene), img)
+        err = relative_rmse(box_filtered_lambert(shot.scene, ALBEDO), img)
         far = beyond_noise(err, noise or 0.0)
         ok = far <= CONDITION_TOLERANCE
         out.append(Row(f"light {shot.name}", ok, f"{shot.label}: {err:.2%} from the analytic image ({far:.2%} beyond "
@@ -192,10 +117,11 @@ def calibration_rows(folder: ImageFolder, material: ImageFolder) -> list[Row]:
     probe = next(s for s in folder.given if s.name == "probe")
     img, noise = _pair(folder, probe)
     want, inner = analytic_lambert(probe.scene, ALBEDO), inner_pixels(probe.scene)
-    encoded = _encoding(img, want, inner)
-    if encoded is not None:
+    encoded = judge.encoding(img, want, inner, "probe: ")
+    if encoded.passed is False:
         return [encoded]
-    found = [_units(img, noise, want, inner), _orientation(img, want, inner)]
+    found = [judge.units(img, want, inner, UNITS_TOLERANCE, noise or 0.0, "probe: "),
+             judge.orientation(img, want, inner, "probe: ")]
     # The bright shot and each other shot are judged only on images placed and scaled right: else their rows
     # repeat those causes (a 1/(4π) in the units read as clipping).
     if not all(r.passed for r in found):

@@ -28,12 +28,15 @@ import numpy as np
 
 from ..data.appearance import Appearance, Kind
 from ..data.metrics import beyond_noise, relative_rmse
-from ..data.scene import EnvironmentLight, Lighting, ProbeScene
+from ..data.scene import EnvironmentLight, Lighting, PointLight, ProbeScene
 from ..engine.results import WHITE, Agreement, Disagreement
+from ..host.analytic import box_filtered_lambert
+from ..host.check import ALBEDO
+from ..host.judge import SAMPLING_TOLERANCE
 from ..host.protocol import Adapter, check_image
 
 BLOCK = 8
-_MEASURED: dict[tuple, tuple[float, float]] = {}
+_MEASURED: dict[tuple, tuple] = {}
 """(error, noise floor) of two adapters' glasses at two scenes, kept for the process (a library's
 glasses are rendered once); at most `KEEP` entries."""
 KEEP = 256
@@ -139,8 +142,10 @@ def _kind(one: Adapter, other: Adapter, kind: Reference | str | None) -> Referen
 
 def calibration_floor(one: Adapter, other: Adapter, condition: Lighting, label: str,
                       scenes: tuple[ProbeScene, ProbeScene], kind: Reference | str | None = None) -> Disagreement | None:
-    """The two adapters' white Lambertians (or their references of this kind, where both declare one) under one condition (two renders each, at these two scenes' seeds), compared pixel by pixel: a
-    Disagreement when they differ beyond the noise by `FLOOR_MIN` or more."""
+    """The two adapters' white Lambertians (or their references of this kind, where both declare one) under one
+    condition (two renders each, at these two scenes' seeds), compared pixel by pixel: a Disagreement when they
+    differ beyond the noise by `FLOOR_MIN` or more, naming the adapter whose white Lambertian is itself off its
+    analytic image there (`_off_analytic`: its fault, not a floor)."""
     kind = _kind(one, other, kind)
     key = ("calibration", one.name, one.identity(), other.name, other.identity(), kind, scenes[0].cache_key(),
            scenes[1].cache_key())
@@ -148,14 +153,32 @@ def calibration_floor(one: Adapter, other: Adapter, condition: Lighting, label: 
         a, b = _calibration_pair(one, kind, scenes), _calibration_pair(other, kind, scenes)
         if len(_MEASURED) >= KEEP:
             _MEASURED.pop(next(iter(_MEASURED)))
-        _MEASURED[key] = (relative_rmse((a[0] + a[1]) / 2, (b[0] + b[1]) / 2),
-                          float(np.hypot(relative_rmse(*a), relative_rmse(*b)) / 2)) if a[0].any() else (0.0, 0.0)
-    err, floor = _MEASURED[key]
+        err, floor = (relative_rmse((a[0] + a[1]) / 2, (b[0] + b[1]) / 2),
+                      float(np.hypot(relative_rmse(*a), relative_rmse(*b)) / 2)) if a[0].any() else (0.0, 0.0)
+        own = _off_analytic({one.name: a, other.name: b}, scenes[0]) \
+            if kind is None and beyond_noise(err, floor) >= FLOOR_MIN else None
+        _MEASURED[key] = (err, floor, own)
+    err, floor, own = _MEASURED[key]
     far = beyond_noise(err, floor)
     if far < FLOOR_MIN:
         return None
     return Disagreement(condition=condition, label=label, kind=WHITE if kind is None else kind.words,
-                        error=err, noise_floor=floor, beyond_noise=far)
+                        error=err, noise_floor=floor, beyond_noise=far, own=own[0] if own else "",
+                        own_error=own[1] if own else 0.0)
+
+
+def _off_analytic(pairs: dict[str, tuple[np.ndarray, np.ndarray]], scene: ProbeScene) -> tuple[str, float] | None:
+    """(adapter, error beyond its noise) of the adapter whose white Lambertian (two seeds' renders) is furthest
+    from its box-filtered analytic image, where that is beyond `judge.SAMPLING_TOLERANCE` (`remap check`'s
+    sampling row would fail); None where both are within it or the scene has no analytic image (several views,
+    a backdrop)."""
+    if scene.views or any(not isinstance(x, (PointLight, EnvironmentLight)) for x in scene.lights):
+        return None
+    want = box_filtered_lambert(scene, ALBEDO).astype(np.float64)
+    found = {name: beyond_noise(relative_rmse(want, (a + b) / 2), relative_rmse(a, b) / 2)
+             for name, (a, b) in pairs.items()}
+    worst = max(found, key=found.get)
+    return (worst, found[worst]) if found[worst] > SAMPLING_TOLERANCE else None
 
 
 def calibration_floors(source: Adapter, target: Adapter,

@@ -89,7 +89,7 @@ CORRUPTIONS = {
     "gamma-encoded": (lambda n, a: _srgb(a), "encoding: probe: the pixels go as the radiance to the power 0."),
     "clipped": (lambda n, a: np.minimum(a, 1.0), "precision: "),
     "exposed x2": (lambda n, a: a * 2, "(a factor of 2)"),
-    "8-bit at 1/64": (lambda n, a: np.round(np.clip(a / 64, 0, 1) * 255) / 255 * 64, "(8-bit, scaled)"),
+    "8-bit at 1/64": (lambda n, a: np.round(np.clip(a / 64, 0, 1) * 255) / 255 * 64, "0.251 apart, scaled after (8-bit)"),
     "watts for W/sr": (lambda n, a: a * 4 * np.pi, "(a factor of 4π)"),
 }
 

@@ -301,3 +301,38 @@ def test_a_glossy_dielectric_is_judged_beyond_the_renderers_glossy_dielectrics_w
     assert reference_kind(Appearance(kind="dielectric", diffuse=(0.5,) * 3)) is None
     _MEASURED.clear()
 
+
+
+def test_an_adapters_own_aliasing_is_never_subtracted_as_the_renderers_floor():
+    """Issue 55: an adapter sampling each pixel at its centre drew the rim light's crescent far from any
+    renderer, and the remaps subtracted "the renderers' 13.5 % on a white Lambertian (rim)" from the
+    material's error. Measured against the box-filtered analytic image, that difference is the adapter's:
+    named, and not subtracted."""
+    from brdfremap.core.job.agreement import _MEASURED, calibration_floors
+    from brdfremap.core.data.scene import ProbeScene
+    from brdfremap.core.job.validation import held_out_scenes
+    from brdfremap.core.testing import analytic_lambert
+    from brdfremap_example.adapter import ToyAdapter
+
+    class Aliased(ToyAdapter):
+        """The toy's white Lambertian with one ray at each pixel's centre."""
+        name = "aliased"
+
+        def render(self, model, params, scene, lobe=None):
+            return analytic_lambert(scene, params["diffuse"])
+
+    scene = ProbeScene(resolution=48)
+    conditions = [(c.name, c.label, (a, b)) for c, a, b in held_out_scenes(scene, False, scene.lights)
+                  if c.name in ("rim", "headlight")]
+    _MEASURED.clear()
+    floors = calibration_floors(ToyAdapter(), Aliased(), conditions)
+    rim = floors["rim"]
+    assert rim.own == "aliased" and rim.own_error > 0.3 and rim.beyond_noise > 0.3, rim
+    assert "headlight" not in floors or not floors["headlight"].own, floors  # the headlight's edge is dark
+    assert not calibration_floors(ToyAdapter(), ToyAdapter(), conditions)  # one renderer: no floor at all
+    _MEASURED.clear()
+    v = _judge(0.008, 0.005, [_check("rim", rim.beyond_noise, 0.01)], agreement=Agreement(floors={"rim": rim}))
+    assert v.status == "unreliable" and [f.kind for f in v.findings] == ["adapter_off", "held_out_above"], v.findings
+    (held,) = [f for f in v.problems if f.kind == "held_out_above"]
+    assert held.conditions[0].renderers == 0.0  # nothing subtracted
+    assert "adapter 'aliased' draws a white Lambertian" in v.reason and "fix the adapter" in v.reason, v.reason
