@@ -7,6 +7,7 @@ from .host.testing import (  # noqa: F401
     SphereHits,
     analytic_glass,
     analytic_lambert,
+    analytic_mirror,
     box_filtered,
     box_filtered_lambert,
     environment_irradiance,

@@ -140,6 +140,7 @@ class CyclesAdapter(Adapter):
                                              "specular_ior_level": 0.5})}
     metals = {kind: ("metallic", {"distribution": "ggx", "roughness": r, "ior": (1.66, 0.88, 0.52),
                                   "extinction": (9.22, 6.27, 4.84)}) for kind, r in (("smooth", 0.1), ("rough", 0.3))}
+    mirror = ("metallic", {"distribution": "ggx", "roughness": 0.0, "ior": 0.0, "extinction": 10.0})  # |r| = 1
     textures = True
     natives = True
     native_lobes = True

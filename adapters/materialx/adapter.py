@@ -94,6 +94,8 @@ class MaterialXAdapter(Adapter):
     transmission_limit = TRANSMISSION + ", by design of a real-time renderer"
     dielectrics = {"glossy": ("open_pbr_surface", {"base_color": 0.5, "specular_roughness": 0.3, "specular_ior": 1.5})}
     metals = {"smooth": _aluminium(0.1), "rough": _aluminium(0.3)}
+    mirror = ("standard_surface", {"base": 1.0, "base_color": 1.0, "metalness": 1.0, "specular_roughness": 0.0,
+                                   "specular": 0.0})
 
     @classmethod
     def unavailable_reason(cls) -> str | None:

@@ -159,6 +159,7 @@ class MitsubaAdapter(Adapter):
                "rough": ("roughdielectric", {"distribution": "ggx", "alpha": 0.1, "int_ior": 1.5})}
     metals = {kind: ("roughconductor", {"material": "none", "distribution": "ggx", "alpha": a, "eta": (1.66, 0.88, 0.52),
                                         "k": (9.22, 6.27, 4.84)}) for kind, a in (("smooth", 0.01), ("rough", 0.09))}
+    mirror = ("conductor", {"material": "none", "eta": 0.0, "k": 10.0})  # an imaginary IOR: |r| = 1 at every angle
     textures = True
     natives = True
     max_scenes = 8

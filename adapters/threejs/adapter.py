@@ -91,6 +91,7 @@ class ThreeJsAdapter(Adapter):
     dielectrics = {"glossy": ("gltf_pbr", {"base_color": 0.5, "metallic": 0.0, "roughness": 0.3, "ior": 1.5})}
     metals = {kind: ("gltf_pbr", {"base_color": ALUMINIUM, "metallic": 1.0, "roughness": r})
               for kind, r in (("smooth", 0.1), ("rough", 0.3))}
+    mirror = ("gltf_pbr", {"base_color": 1.0, "metallic": 1.0, "roughness": 0.0})
 
     @classmethod
     def scene_problem(cls, scene: ProbeScene) -> str | None:

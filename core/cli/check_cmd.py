@@ -41,12 +41,15 @@ def run(args: argparse.Namespace) -> int:
     glass = getattr(entry.factory, "glasses", {}).get("smooth")
     if glass is not None:
         glass = (glass[0], entry.models[glass[0]].complete(glass[1], file=f"adapter {name!r}", prefix="glasses.smooth"))
+    mirror = getattr(entry.factory, "mirror", None)
+    if mirror is not None:
+        mirror = (mirror[0], entry.models[mirror[0]].complete(mirror[1], file=f"adapter {name!r}", prefix="mirror"))
     adapter = registry.create(name)
     try:
         rows = run_checks(lambda model, params, scene, lobe=None: plugin_call(
                               adapter.render, f"adapter {name!r}", adapter.models[model], params, scene, lobe), models,
                           white, glass, LightType.ENVIRONMENT in entry.light_types,
-                          entry.factory.transmission_limit)
+                          entry.factory.transmission_limit, mirror)
     finally:
         adapter.close()
     width = max(len(r.name) for r in rows)

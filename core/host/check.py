@@ -23,7 +23,7 @@ from ..data.imageio import HALF_EPS
 from ..data.metrics import beyond_noise, relative_rmse
 from ..data.scene import EnvironmentLight, PointLight, ProbeScene
 from . import judge
-from .analytic import analytic_glass, analytic_lambert, scene_for, sphere_hits
+from .analytic import analytic_glass, analytic_lambert, analytic_mirror, scene_for, sphere_hits
 from .judge import (FACTORS, FLIP_FIX, FLIPS, PLACEMENTS, SHIFT_FIX, SHIFTS, Row,  # noqa: F401 (the rows' names)
                     placements, usual_factor)
 
@@ -61,6 +61,7 @@ TITLES = {
     "lobes": "lobes: diffuse + specular = the full image",
     "precision": "precision: highlights far above 1, unclipped",
     "sampling": "sampling: the silhouette and a rim light, each pixel's area",
+    "glossy": "glossy: a perfect mirror against its analytic image (the specular path)",
     "transmission": "transmission: a smooth glass against its analytic image",
 }
 """Every check's row name, in the order `run` runs them."""
@@ -251,6 +252,42 @@ def sampling(render: Callable, white: tuple[str, dict] | None) -> Row:
     return _titled(judge.sampling(images, scenes))
 
 
+MIRROR = ProbeScene(lights=[EnvironmentLight(type="environment", map="studio")], resolution=48, spp=64)
+GLOSSY_TOLERANCE = 0.10
+"""A mirror further than this beyond its noise from its analytic image (48 px, 64 spp, two seeds): Mitsuba 0.6 %,
+Cycles 0.5 %, three.js 3.0 %, MaterialX 2.6 %; the environment mirrored in the reflection 134 %, turned 10° 73 %,
+1/π of it 68 %."""
+MIRROR_FIX = ("a perfect mirror reflects the environment along d - 2(d.n)n, the map oriented as the diffuse sphere "
+              "sees it (see units and orientation), at its full radiance: no prefiltering blur, no extra factor; "
+              "check how the renderer's specular rays look up the environment")
+
+
+def glossy(render: Callable, mirror: tuple[str, dict] | None, environment: bool) -> Row:
+    """The specular path: a perfect mirror under the studio environment against its analytic image (box-filtered,
+    two seeds: beyond their noise), where the adapter renders an environment; a fault is named as a flip or a
+    usual factor where it is one."""
+    name = TITLES["glossy"]
+    if not environment:
+        return Row(name, True, "no environment light: a mirror shows point lights as points, nothing to judge")
+    if mirror is None:
+        return Row(name, None, "no mirror declared", "declare a perfect mirror (`Adapter.mirror`: reflectance 1 at "
+                   "every angle, roughness 0; a conductor of IOR 0 + 10i, or a white metal)")
+    a, b = (np.asarray(render(mirror[0], mirror[1], MIRROR.with_(seed=s)), np.float64) for s in (0, 1))
+    img, noise = (a + b) / 2, relative_rmse(a, b) / 2
+    want = analytic_mirror(MIRROR, supersample=8).astype(np.float64)
+    err = relative_rmse(want, img)
+    far = beyond_noise(err, noise)
+    if far <= GLOSSY_TOLERANCE:
+        return Row(name, True, f"{err:.2%} from the analytic mirror ({far:.2%} beyond the noise)")
+    flips = {k: relative_rmse(f(want), img) for k, f in judge.FLIPS.items()}
+    flip = min(flips, key=flips.get)
+    ratio = float(img.sum() / max(float(want.sum()), 1e-30))
+    known = judge.usual_factor(ratio)
+    why = (f"; the reflection is {flip} ({flips[flip]:.2%} from that)" if flips[flip] < err / 2 else "") + (
+        f"; the image is {ratio:.4g}x it" + (f" (a factor of {known})" if known else ""))
+    return Row(name, False, f"{err:.2%} from the analytic mirror ({far:.2%} beyond the noise){why}", MIRROR_FIX)
+
+
 GLASS = ProbeScene(lights=[EnvironmentLight(type="environment", map="studio")], resolution=48, spp=256)
 GLASS_TOLERANCE = 0.03
 
@@ -287,7 +324,7 @@ HANG_FIX = ("the renderer likely does not honour the sample count it is given (a
 
 
 NEEDS = {"units": ("quantisation", "encoding"), "orientation": ("quantisation", "encoding"),
-         "precision": ("units",), "sampling": ("units", "orientation")}
+         "precision": ("units",), "sampling": ("units", "orientation"), "glossy": ("units", "orientation")}
 """A row judged only where the row it names passed (else its failure would be that row's cause read again:
 a display curve read as a units factor and a shift, a units factor as aliasing)."""
 
@@ -308,7 +345,7 @@ def _remembered(render: Callable) -> Callable:
 
 
 def run(render: Callable, models: dict, white: tuple[str, dict] | None, glass: tuple[str, dict] | None = None,
-        environment: bool = False, transmission_limit: str = "") -> list[Row]:
+        environment: bool = False, transmission_limit: str = "", mirror: tuple[str, dict] | None = None) -> list[Row]:
     """Every check (`TITLES`); ``render(model, params, scene, lobe=None) -> image``. A check one of
     whose renders did not finish (`RenderTimeoutError`) is a failed row with the likely cause, and the
     checks after it do not run (each would wait as long); a check whose prerequisite failed (`NEEDS`) is
@@ -320,7 +357,7 @@ def run(render: Callable, models: dict, white: tuple[str, dict] | None, glass: t
               "determinism": lambda: determinism(render, models), "seed": lambda: seed(render, white, environment),
               "lobes": lambda: lobes(render, models),
               "precision": lambda: precision(render, white), "quantisation": lambda: quantisation(render, white),
-              "sampling": lambda: sampling(render, white),
+              "sampling": lambda: sampling(render, white), "glossy": lambda: glossy(render, mirror, environment),
               "transmission": lambda: transmission(render, models, glass, environment, transmission_limit)}
     stopped: str | None = None  # why the checks left do not run
     blocked: set[str] = set()  # rows not judged for a prerequisite's failure (`NEEDS`), and so theirs

@@ -62,6 +62,12 @@ class Adapter(abc.ABC):
     """Clear glasses of IOR 1.5 (model, params) by kind: "smooth" (perfectly smooth), "rough" (GGX,
     α 0.1). An adapter that declares them renders light through a sphere (`ModelSpec.transmits`);
     `remap check` and the verdict compare them with another adapter's."""
+    mirror: ClassVar[tuple[str, dict] | None] = None
+    """A perfect mirror (model, params): reflectance 1 at every angle, perfectly smooth (a conductor of a purely
+    imaginary IOR, or a white metal of roughness 0), which `remap check` renders under the studio environment
+    against its analytic image: the specular path (reflection directions, the environment as reflected, its
+    scale), whose fault a fit would read as the model's. None: the adapter offers none (with an environment
+    light, its glossy row is not run)."""
     transmission_limit: ClassVar[str] = ""
     """What keeps this renderer's light through a sphere from being a path tracer's, where it is a
     property of the renderer rather than a fault to fix (a real-time renderer's screen-space

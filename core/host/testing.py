@@ -15,6 +15,7 @@ from .analytic import (
     SphereHits,
     analytic_glass,
     analytic_lambert,
+    analytic_mirror,
     environment_irradiance,
     point_light_irradiance,
     scene_for,
@@ -110,6 +111,11 @@ class AdapterContract:
 
     def test_sampling(self):
         self._holds(check.sampling(self._render, self._white()))
+
+    def test_glossy(self):
+        given = getattr(self.factory, "mirror", None)
+        mirror = None if given is None else (given[0], self._params(given[0], **given[1]))
+        self._holds(check.glossy(self._render, mirror, LightType.ENVIRONMENT in self.factory.light_types))
 
     def test_determinism(self):
         self._holds(check.determinism(self._render, self.adapter.models))

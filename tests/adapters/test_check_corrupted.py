@@ -91,3 +91,35 @@ def test_one_ray_at_each_pixel_centre_fails_sampling_as_the_adapters_aliasing():
 @pytest.mark.parametrize("kind", ["correct", "clipped at 4"])
 def test_the_remap_check_table_has_every_row_in_order(kind):
     assert list(_rows(kind)) == list(check.TITLES)
+
+
+# --- The specular path: a perfect mirror under the studio environment ------------------------------------------
+
+from brdfremap.core.testing import analytic_mirror  # noqa: E402
+
+MIRRORED = {
+    "correct": lambda img: img,
+    "the environment mirrored in the reflection": lambda img: img[:, ::-1],
+    "a factor of 1/π on specular light": lambda img: img / np.pi,
+}
+
+
+@pytest.mark.parametrize("kind, passed, words", [
+    ("correct", True, "from the analytic mirror"),
+    ("the environment mirrored in the reflection", False, "the reflection is mirrored left-right"),
+    ("a factor of 1/π on specular light", False, "(a factor of 1/π)"),
+])
+def test_a_fault_of_the_specular_path_fails_the_glossy_row_with_its_cause(kind, passed, words):
+    """The white Lambertian shows none of these: a mirror's reflection does (a fit would read them as the
+    model's highlight)."""
+    def render(model, params, scene, lobe=None):
+        return np.asarray(MIRRORED[kind](analytic_mirror(scene, 8)), np.float32)
+    row = check.glossy(render, ("mirror", {}), environment=True)
+    assert row.passed is passed and words in row.detail, row
+    assert (row.fix == check.MIRROR_FIX) is (not passed)
+
+
+def test_the_glossy_row_asks_for_a_mirror_only_of_an_adapter_with_an_environment():
+    assert check.glossy(None, None, environment=False).passed is True
+    row = check.glossy(None, None, environment=True)
+    assert row.passed is None and "Adapter.mirror" in row.fix, row
