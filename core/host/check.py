@@ -81,14 +81,23 @@ def encoding(render: Callable, white: tuple[str, dict] | None) -> Row:
     """The white Lambertian's pixels as a power of the analytic radiance: linear, or a display curve."""
     if white is None:
         return Row(TITLES["encoding"], None, "no calibration material", NO_WHITE)
-    return _titled(judge.encoding(*_probe(render, white)))
+    img, want, inner = _probe(render, white)
+    return _titled(judge.encoding(img, want, inner, otherwise=_mistaken(want)))
 
 
 def calibration(render: Callable, white: tuple[str, dict] | None) -> Row:
     if white is None:
         return Row(TITLES["units"], None, "no calibration material", "declare a white diffuse material of albedo 0.8 "
                    "(a definition's `calibration: {model: ..., params: {...}}`)")
-    return _titled(judge.units(*_probe(render, white), CALIBRATION_TOLERANCE))
+    img, want, inner = _probe(render, white)
+    return _titled(judge.units(img, want, inner, CALIBRATION_TOLERANCE, otherwise=_mistaken(want)))
+
+
+def _mistaken(want: np.ndarray) -> dict[str, np.ndarray]:
+    """The probe's image as a usual mistake draws it, by its words: a point light without its 1/r² falloff."""
+    hits = sphere_hits(CALIBRATION)
+    near = ((np.asarray(CALIBRATION.point_lights[0].position) - hits.position) ** 2).sum(-1)
+    return {"without the light's inverse-square falloff (a light's decay 0, or a sun)": want * near[..., None]}
 
 
 def _titled(row: Row) -> Row:
@@ -118,14 +127,28 @@ def orientation(render: Callable, white: tuple[str, dict] | None) -> Row:
     return _titled(judge.orientation(img, analytic_lambert(scene, ALBEDO), inner_pixels(scene)))
 
 
-def determinism(render: Callable, models: dict) -> Row:
+STATE_FIX = ("each render starts from nothing: clear the frame and depth buffers, replace the material and its "
+             "textures, reset the sampler; nothing of the render before it may show")
+
+
+def determinism(render: Callable, models: dict, white: tuple[str, dict] | None = None) -> Row:
+    """Each model at its defaults twice with one seed, bit for bit; with another material rendered between the
+    two (the white Lambertian), so that state one render leaves (a buffer not cleared, a material not replaced)
+    shows as a difference, not as a material."""
     name = TITLES["determinism"]
     for model, spec in models.items():
         p = spec.complete({})
-        if not np.array_equal(render(model, p, SCENE), render(model, p, SCENE)):
+        first = render(model, p, SCENE)
+        if not np.array_equal(first, render(model, p, SCENE)):
             return Row(name, False, f"model {model}: two renders with seed {SCENE.seed} differ",
                        "pass the scene's seed to the renderer's sampler")
-    return Row(name, True, f"{len(models)} model(s), bit for bit")
+        if white is not None and (white[0], white[1]) != (model, p):
+            render(white[0], white[1], SCENE)
+            if not np.array_equal(first, render(model, p, SCENE)):
+                return Row(name, False, f"model {model}: its render differs after the calibration material was "
+                           "rendered between (the render before it left something behind)", STATE_FIX)
+    between = " with another material rendered between" if white is not None else ""
+    return Row(name, True, f"{len(models)} model(s), bit for bit{between}")
 
 
 SEED_FIX = ("pass the scene's seed to the renderer's sampler; a renderer that ignores it makes every noise floor 0 "
@@ -323,7 +346,7 @@ HANG_FIX = ("the renderer likely does not honour the sample count it is given (a
             "that is only slow needs a longer `timeout`")
 
 
-NEEDS = {"units": ("quantisation", "encoding"), "orientation": ("quantisation", "encoding"),
+NEEDS = {"units": ("quantisation", "encoding"), "orientation": ("units",),
          "precision": ("units",), "sampling": ("units", "orientation"), "glossy": ("units", "orientation")}
 """A row judged only where the row it names passed (else its failure would be that row's cause read again:
 a display curve read as a units factor and a shift, a units factor as aliasing)."""
@@ -354,7 +377,7 @@ def run(render: Callable, models: dict, white: tuple[str, dict] | None, glass: t
     rows: dict[str, Row] = {}
     checks = {"images": lambda: images(render, models, environment), "encoding": lambda: encoding(render, white),
               "units": lambda: calibration(render, white), "orientation": lambda: orientation(render, white),
-              "determinism": lambda: determinism(render, models), "seed": lambda: seed(render, white, environment),
+              "determinism": lambda: determinism(render, models, white), "seed": lambda: seed(render, white, environment),
               "lobes": lambda: lobes(render, models),
               "precision": lambda: precision(render, white), "quantisation": lambda: quantisation(render, white),
               "sampling": lambda: sampling(render, white), "glossy": lambda: glossy(render, mirror, environment),

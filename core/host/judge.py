@@ -50,8 +50,8 @@ QUANTISED_LEVELS, GRADIENT_LEVELS = 256, 1024
 8-bit output, whatever curve or scale was applied after."""
 
 UNITS_FIX = ("pixels are radiance (W m^-2 sr^-1): no exposure, gain or tone mapping; a point light's intensity is "
-             "radiant intensity in W/sr (a power P in W is 4π·I); the white Lambertian's BRDF is albedo/π, its "
-             "albedo 0.8")
+             "radiant intensity in W/sr (a power P in W is 4π·I) falling off as 1/r²; the white Lambertian's BRDF "
+             "is albedo/π, its albedo 0.8; the sphere a true sphere or a mesh fine enough that no facet shows")
 FLOAT_FIX = ("write or read back 32-bit (or half) float linear pixels: an 8-bit image (PNG, a uint8 read-back) clips "
              "highlights at 1 and rounds the rest to 256 levels; no tone curve or view transform that stops at 1")
 ENCODING_FIX = ("write linear radiance: no view transform or display curve (Blender: Standard; other renderers: "
@@ -103,31 +103,44 @@ def placements(want: np.ndarray, img: np.ndarray, inner: np.ndarray, same_total:
     return errors
 
 
-def encoding(img: np.ndarray, want: np.ndarray, inner: np.ndarray, where: str = "") -> Row:
+def encoding(img: np.ndarray, want: np.ndarray, inner: np.ndarray, where: str = "",
+             otherwise: dict[str, np.ndarray] | None = None) -> Row:
     """The power the pixels go as of the radiance (a log-log line through the lit interior, the image placed
-    as it lies): a display curve (sRGB, a gamma) named as such, not as a units factor or a shift."""
-    errors = placements(want, img, inner, same_total=True)
-    want = PLACEMENTS[min(errors, key=errors.get)](want)
-    lit = inner & (want.mean(axis=2) > 0.02 * want.max()) & (img.mean(axis=2) > 0)
-    levels = np.unique(img[lit]).size
-    if lit.sum() < 16 or levels < 32:
-        return Row("encoding", None, f"{where}too few lit pixels or levels to fit a curve ({int(lit.sum())} pixels, "
-                   f"{levels} levels: see quantisation)")
-    x, y = np.log(want[lit].mean(axis=1)), np.log(img[lit].mean(axis=1))
-    power = float(np.polyfit(x, y, 1)[0])
+    as it lies): a display curve (sRGB, a gamma) named as such, not as a units factor or a shift. An image
+    linear in one of ``otherwise`` (the image a usual mistake makes: a light without falloff) is linear: the
+    mistake is units' to name."""
+    power = _power(img, want, inner)
+    if power is None:
+        levels = np.unique(img[inner & (img.mean(axis=2) > 0)]).size
+        return Row("encoding", None, f"{where}too few lit pixels or levels to fit a curve ({levels} levels: see "
+                   "quantisation)")
     if abs(power - 1.0) <= GAMMA_TOLERANCE:
         return Row("encoding", True, f"{where}the pixels go as the radiance to the power {power:.3f}: linear")
+    for words, alt in (otherwise or {}).items():
+        if abs((_power(img, alt, inner) or 0.0) - 1.0) <= GAMMA_TOLERANCE:
+            return Row("encoding", True, f"{where}the pixels are linear in the analytic image {words} (see units)")
     cause = "gamma- or sRGB-encoded (a display curve)" if power < 1 else \
         "a curve applied, or not the white Lambertian of albedo 0.8"
     return Row("encoding", False, f"{where}the pixels go as the radiance to the power {power:.2f}, not 1: {cause}",
                ENCODING_FIX)
 
 
+def _power(img: np.ndarray, want: np.ndarray, inner: np.ndarray) -> float | None:
+    """The slope of log pixel against log radiance over the lit interior, the expected image placed as the image
+    lies; None where too few pixels or levels fit a curve."""
+    errors = placements(want, img, inner, same_total=True)
+    want = PLACEMENTS[min(errors, key=errors.get)](want)
+    lit = inner & (want.mean(axis=2) > 0.02 * want.max()) & (img.mean(axis=2) > 0)
+    if lit.sum() < 16 or np.unique(img[lit]).size < 32:
+        return None
+    return float(np.polyfit(np.log(want[lit].mean(axis=1)), np.log(img[lit].mean(axis=1)), 1)[0])
+
+
 def units(img: np.ndarray, want: np.ndarray, inner: np.ndarray, tolerance: float, noise: float = 0.0,
-          where: str = "") -> Row:
+          where: str = "", otherwise: dict[str, np.ndarray] | None = None) -> Row:
     """The image against the analytic radiance, placed right (a flip or a shift is orientation's failure, not a
     units factor: one row low read as "10.92 % off; 1.023x"), beyond its noise; off, the ratio and its usual
-    factor."""
+    factor, and which of ``otherwise`` (the image a usual mistake makes, by its words) it has the shape of."""
     errors = placements(want, img, inner)
     best = min(errors, key=errors.get)
     far = beyond_noise(errors[best], noise)
@@ -138,6 +151,10 @@ def units(img: np.ndarray, want: np.ndarray, inner: np.ndarray, tolerance: float
     ratio = float(img[inner].sum() / max(float(want[inner].sum()), 1e-30))
     known = usual_factor(ratio)
     said = f" (a factor of {known})" if known else ""
+    for words, alt in (otherwise or {}).items():
+        shaped = relative_rmse(alt[inner] * float(img[inner].sum() / max(float(alt[inner].sum()), 1e-30)), img[inner])
+        if beyond_noise(shaped, noise) < tolerance:
+            said += f"; it has the shape of the analytic image {words} ({shaped:.2%} from it, scaled)"
     return Row("units", False, f"{where}{errors[best]:.2%} off the analytic radiance; the image is {ratio:.4g}x it"
                f"{said}", UNITS_FIX)
 

@@ -118,7 +118,7 @@ class AdapterContract:
         self._holds(check.glossy(self._render, mirror, LightType.ENVIRONMENT in self.factory.light_types))
 
     def test_determinism(self):
-        self._holds(check.determinism(self._render, self.adapter.models))
+        self._holds(check.determinism(self._render, self.adapter.models, self._white()))
 
     def test_seed(self):
         self._holds(check.seed(self._render, self._white(), LightType.ENVIRONMENT in self.factory.light_types))

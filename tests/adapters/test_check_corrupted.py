@@ -123,3 +123,34 @@ def test_the_glossy_row_asks_for_a_mirror_only_of_an_adapter_with_an_environment
     assert check.glossy(None, None, environment=False).passed is True
     row = check.glossy(None, None, environment=True)
     assert row.passed is None and "Adapter.mirror" in row.fix, row
+
+
+def test_a_light_without_falloff_is_named_in_units_and_orientation_does_not_read_it_as_a_shift():
+    """pygfx's default point light (decay 0): units said "13.4x", orientation "shifted one column right"."""
+    from brdfremap.core.testing import sphere_hits
+
+    def render(model, params, scene, lobe=None):
+        hits = sphere_hits(scene)
+        d2 = ((np.asarray(scene.point_lights[0].position) - hits.position) ** 2).sum(-1)
+        return np.asarray(box_filtered_lambert(scene, 0.8) * d2[..., None], np.float32)
+    rows = {key: row for key, row in zip(check.TITLES, check.run(render, MODELS, WHITE))}
+    assert _failed(rows) == ["units"], rows
+    assert "the shape of the analytic image without the light's inverse-square falloff" in rows["units"].detail
+    assert rows["orientation"].passed is None, rows["orientation"]
+
+
+def test_state_left_by_the_render_before_fails_determinism():
+    """A newcomer's buffers were not cleared: each render drew over the one before, and units, orientation and
+    determinism passed."""
+    last = {}
+
+    def render(model, params, scene, lobe=None):
+        img = box_filtered_lambert(scene, np.asarray(params["albedo"], np.float64))
+        key = scene.resolution
+        out = np.maximum(img, last.get(key, 0 * img))
+        last[key] = out
+        return np.asarray(out, np.float32)
+    models = {**MODELS, "grey": ModelSpec(name="grey", parameters=(ParamSpec(name="albedo", kind="rgb",
+                                                                             default=(0.9,) * 3),))}
+    row = check.determinism(render, models, WHITE)
+    assert row.passed is False and "left something behind" in row.detail and "clear the frame" in row.fix, row
