@@ -34,7 +34,9 @@ class Row:
 
 FACTORS = {"π": math.pi, "1/π": 1 / math.pi, "2": 2.0, "1/2": 0.5, "4π": 4 * math.pi, "1/(4π)": 1 / (4 * math.pi),
            "2π": 2 * math.pi, "1/(2π)": 1 / (2 * math.pi), "1/683 (lumens per watt)": 1 / 683.0,
-           "4π/683 (candela read as watts)": 4 * math.pi / 683.0}
+           "4π/683 (candela read as watts)": 4 * math.pi / 683.0,
+           "0.604/0.8 (the albedo 0.8 read as an sRGB colour: pass colours to the renderer as linear)":
+           ((0.8 + 0.055) / 1.055) ** 2.4 / 0.8}
 """Scale errors with a usual cause: radiance against irradiance (π), power against intensity (4π)."""
 GAMMA_TOLERANCE = 0.08
 """The pixels go as the radiance to a power further than this from 1: an encoded image (sRGB: about 0.45)."""

@@ -154,3 +154,12 @@ def test_state_left_by_the_render_before_fails_determinism():
                                                                              default=(0.9,) * 3),))}
     row = check.determinism(render, models, WHITE)
     assert row.passed is False and "left something behind" in row.detail and "clear the frame" in row.fix, row
+
+
+def test_an_albedo_read_as_an_srgb_colour_is_named_by_its_factor():
+    """pygfx reads material colours as sRGB: units said "0.7544x", with the generic fix."""
+    def render(model, params, scene, lobe=None):
+        linear = ((np.asarray(params["albedo"], np.float64) + 0.055) / 1.055) ** 2.4
+        return np.asarray(box_filtered_lambert(scene, linear), np.float32)
+    row = check.calibration(render, WHITE)
+    assert row.passed is False and "the albedo 0.8 read as an sRGB colour" in row.detail, row
