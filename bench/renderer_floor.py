@@ -40,11 +40,12 @@ def main() -> int:
     what = {None: "white Lambertians", Reference.GLOSSY_DIELECTRIC: "glossy grey dielectrics"}.get(
         kind if both else None, f"{args.metal} aluminium")
     print(f"{args.source} against {args.target}, {what}, validation at {4 * args.spp} spp or more")
-    print(f"{'condition':12} {'spp':>5} {'error':>8} {'noise':>8} {'beyond':>8}")
+    print(f"{'condition':12} {'spp':>5} {'error':>8} {'noise':>8} {'beyond':>8}  at fault (off its analytic image)")
     measured = [v for k, v in _MEASURED.items() if k[0] == "calibration"]
-    for (name, _, (a, _b)), (err, noise) in zip(conditions, measured):
+    for (name, _, (a, _b)), (err, noise, own) in zip(conditions, measured):
         beyond = floors[name].beyond_noise if name in floors else 0.0
-        print(f"{name:12} {2 * a.spp:5d} {err:8.2%} {noise:8.2%} {beyond:8.2%}")
+        fault = f"{own[0]} {own[1]:.2%}" if own else "-"
+        print(f"{name:12} {2 * a.spp:5d} {err:8.2%} {noise:8.2%} {beyond:8.2%}  {fault}")
     return 0
 
 
