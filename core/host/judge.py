@@ -240,6 +240,7 @@ def sampling(images: dict[str, tuple[np.ndarray, float]], scenes: dict[str, Prob
     if far <= SAMPLING_TOLERANCE:
         return Row("sampling", True, f"{said} from the box-filtered analytic image (at most {far:.2%} beyond the "
                    "noise)")
-    centre = f"; {point:.2%} from it sampled at each pixel's centre: one sample a pixel" if point < err else ""
+    centre = f"; {point:.2%} from the analytic image sampled at each pixel's centre: one sample a pixel" \
+        if point < err else ""
     return Row("sampling", False, f"{worst}: {err:.2%} from the box-filtered analytic image ({far:.2%} beyond the "
                f"noise){centre}", SAMPLING_FIX)

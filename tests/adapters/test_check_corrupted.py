@@ -82,7 +82,7 @@ def test_one_ray_at_each_pixel_centre_fails_sampling_as_the_adapters_aliasing():
     rows = _rows("one ray at each pixel's centre")
     assert _failed(rows) == ["sampling"], rows
     detail = rows["sampling"].detail
-    assert detail.startswith("rim light: ") and "from it sampled at each pixel's centre: one sample a pixel" in detail
+    assert detail.startswith("rim light: ") and "from the analytic image sampled at each pixel's centre: one sample a pixel" in detail
     far = float(detail.split("(")[1].split("%")[0]) / 100
     assert far > 3 * judge.SAMPLING_TOLERANCE, detail  # far from the threshold, not a hair over it
     assert "integrate each pixel over its area" in rows["sampling"].fix
