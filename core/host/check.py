@@ -377,7 +377,8 @@ def run(render: Callable, models: dict, white: tuple[str, dict] | None, glass: t
     rows: dict[str, Row] = {}
     checks = {"images": lambda: images(render, models, environment), "encoding": lambda: encoding(render, white),
               "units": lambda: calibration(render, white), "orientation": lambda: orientation(render, white),
-              "determinism": lambda: determinism(render, models, white), "seed": lambda: seed(render, white, environment),
+              "determinism": lambda: determinism(render, models, white),
+              "seed": lambda: seed(render, white, environment),
               "lobes": lambda: lobes(render, models),
               "precision": lambda: precision(render, white), "quantisation": lambda: quantisation(render, white),
               "sampling": lambda: sampling(render, white), "glossy": lambda: glossy(render, mirror, environment),

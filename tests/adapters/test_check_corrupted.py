@@ -62,7 +62,8 @@ def test_an_8_bit_exposure_at_1_64_is_named_quantised_not_a_units_factor():
     detail = rows["quantisation"].detail
     assert "its lit pixels take 3 values where the analytic gradient has" in detail, detail
     assert "8-bit (3 levels 0.251 apart, scaled after)" in detail, detail
-    assert rows["units"].passed is None and "quantisation" in rows["units"].detail and "did not pass" in rows["units"].detail, rows["units"]
+    units = rows["units"]
+    assert units.passed is None and "quantisation" in units.detail and "did not pass" in units.detail, units
     assert rows["orientation"].passed is None
 
 
@@ -82,7 +83,8 @@ def test_one_ray_at_each_pixel_centre_fails_sampling_as_the_adapters_aliasing():
     rows = _rows("one ray at each pixel's centre")
     assert _failed(rows) == ["sampling"], rows
     detail = rows["sampling"].detail
-    assert detail.startswith("rim light: ") and "from the analytic image sampled at each pixel's centre: one sample a pixel" in detail
+    assert detail.startswith("rim light: "), detail
+    assert "from the analytic image sampled at each pixel's centre: one sample a pixel" in detail, detail
     far = float(detail.split("(")[1].split("%")[0]) / 100
     assert far > 3 * judge.SAMPLING_TOLERANCE, detail  # far from the threshold, not a hair over it
     assert "integrate each pixel over its area" in rows["sampling"].fix
