@@ -30,6 +30,9 @@ class Row:
     fix: str = ""
     by_design: bool = False
     """A failure the adapter declares a property of its renderer (`Adapter.transmission_limit`)."""
+    blocks: bool = True
+    """Whether the rows that need this one wait for it when it fails (`core.host.check.NEEDS`): a units error
+    of a few percent with no usual cause does not, so that sampling can name what it likely is."""
 
 
 FACTORS = {"π": math.pi, "1/π": 1 / math.pi, "2": 2.0, "1/2": 0.5, "4π": 4 * math.pi, "1/(4π)": 1 / (4 * math.pi),
@@ -38,6 +41,11 @@ FACTORS = {"π": math.pi, "1/π": 1 / math.pi, "2": 2.0, "1/2": 0.5, "4π": 4 * 
            "0.604/0.8 (the albedo 0.8 read as an sRGB colour: pass colours to the renderer as linear)":
            ((0.8 + 0.055) / 1.055) ** 2.4 / 0.8}
 """Scale errors with a usual cause: radiance against irradiance (π), power against intensity (4π)."""
+SHAPED = 0.05
+"""An image within this of a usual mistake's analytic image (scaled), and four times nearer it than the right one,
+has that mistake's shape (a light without falloff, drawn with one sample a pixel: 3 % from it)."""
+SMALL_UNITS = 0.05
+"""A units error whose scale is within this of 1, with no usual factor: the sampling or the mesh more likely."""
 GAMMA_TOLERANCE = 0.08
 """The pixels go as the radiance to a power further than this from 1: an encoded image (sRGB: about 0.45)."""
 BRIGHT_TOLERANCE = 0.9
@@ -58,6 +66,9 @@ FLOAT_FIX = ("write or read back 32-bit (or half) float linear pixels: an 8-bit 
              "highlights at 1 and rounds the rest to 256 levels; no tone curve or view transform that stops at 1")
 ENCODING_FIX = ("write linear radiance: no view transform or display curve (Blender: Standard; other renderers: "
                 "linear, raw or scene-referred output), no gamma; a read-back of an sRGB target is decoded first")
+GRAZING_FIX = ("the calibration material must be a Lambertian at every angle: no specular or Fresnel term left on "
+               "(a Phong or a principled material with its specular at 0 still reflects at grazing angles; use a "
+               "diffuse-only material), and a point light in W/sr falling off as 1/r² wherever it is")
 SAMPLING_FIX = ("integrate each pixel over its area: several samples a pixel spread over it with a box filter (a path "
                 "tracer's pixel filter, a rasteriser's supersampling); one sample at each pixel's centre draws the "
                 "silhouette and a rim light's crescent wrong, and a fit reads that as the material")
@@ -155,10 +166,14 @@ def units(img: np.ndarray, want: np.ndarray, inner: np.ndarray, tolerance: float
     said = f" (a factor of {known})" if known else ""
     for words, alt in (otherwise or {}).items():
         shaped = relative_rmse(alt[inner] * float(img[inner].sum() / max(float(alt[inner].sum()), 1e-30)), img[inner])
-        if beyond_noise(shaped, noise) < tolerance:
+        if beyond_noise(shaped, noise) < max(tolerance, SHAPED) and shaped < errors[best] / 4:
             said += f"; it has the shape of the analytic image {words} ({shaped:.2%} from it, scaled)"
+    small = not said and abs(ratio - 1.0) < SMALL_UNITS
+    if small:
+        said = ("; a few percent and no usual factor: more likely how the pixels are sampled (see sampling) or the "
+                "sphere's facets than units")
     return Row("units", False, f"{where}{errors[best]:.2%} off the analytic radiance; the image is {ratio:.4g}x it"
-               f"{said}", UNITS_FIX)
+               f"{said}", UNITS_FIX, blocks=not small)
 
 
 def orientation(img: np.ndarray, want: np.ndarray, inner: np.ndarray, where: str = "") -> Row:
@@ -202,6 +217,12 @@ def _one_step(levels: np.ndarray) -> float | None:
     return step if np.allclose(ratio, np.round(ratio), atol=1e-3) else None
 
 
+def plateau(img: np.ndarray) -> np.ndarray:
+    """The pixels on a plateau (`clipped`): a mask, empty where the image has none."""
+    lit = np.asarray(img, np.float64).max(axis=-1)
+    return lit >= float(lit.max()) * (1 - 1e-6) if clipped(img) else np.zeros(lit.shape, bool)
+
+
 def clipped(img: np.ndarray) -> str:
     """Words when the image's brightest pixels sit on one plateau (a ceiling: 1, or any a renderer clamps
     at), with lit pixels below it, else ""."""
@@ -240,7 +261,11 @@ def sampling(images: dict[str, tuple[np.ndarray, float]], scenes: dict[str, Prob
     if far <= SAMPLING_TOLERANCE:
         return Row("sampling", True, f"{said} from the box-filtered analytic image (at most {far:.2%} beyond the "
                    "noise)")
-    centre = f"; {point:.2%} from the analytic image sampled at each pixel's centre: one sample a pixel" \
-        if point < err else ""
+    if point < min(err / 2, SAMPLING_TOLERANCE):
+        why, fix = f"; {point:.2%} from the analytic image sampled at each pixel's centre: one sample a pixel", \
+            SAMPLING_FIX
+    else:
+        why, fix = (f"; {point:.2%} from the analytic image sampled at each pixel's centre too: not the pixel "
+                    "filter, the light drawn otherwise at grazing angles"), GRAZING_FIX
     return Row("sampling", False, f"{worst}: {err:.2%} from the box-filtered analytic image ({far:.2%} beyond the "
-               f"noise){centre}", SAMPLING_FIX)
+               f"noise){why}", fix)

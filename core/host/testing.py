@@ -112,6 +112,10 @@ class AdapterContract:
     def test_sampling(self):
         self._holds(check.sampling(self._render, self._white()))
 
+    def test_environment(self):
+        self._holds(check.lit_by_environment(self._render, self._white(),
+                                             LightType.ENVIRONMENT in self.factory.light_types))
+
     def test_glossy(self):
         given = getattr(self.factory, "mirror", None)
         mirror = None if given is None else (given[0], self._params(given[0], **given[1]))

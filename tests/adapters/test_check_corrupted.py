@@ -134,7 +134,7 @@ def test_a_light_without_falloff_is_named_in_units_and_orientation_does_not_read
     def render(model, params, scene, lobe=None):
         hits = sphere_hits(scene)
         d2 = ((np.asarray(scene.point_lights[0].position) - hits.position) ** 2).sum(-1)
-        return np.asarray(box_filtered_lambert(scene, 0.8) * d2[..., None], np.float32)
+        return np.asarray(box_filtered_lambert(scene, np.asarray(params["albedo"])) * d2[..., None], np.float32)
     rows = {key: row for key, row in zip(check.TITLES, check.run(render, MODELS, WHITE))}
     assert _failed(rows) == ["units"], rows
     assert "the shape of the analytic image without the light's inverse-square falloff" in rows["units"].detail
@@ -165,3 +165,66 @@ def test_an_albedo_read_as_an_srgb_colour_is_named_by_its_factor():
         return np.asarray(box_filtered_lambert(scene, linear), np.float32)
     row = check.calibration(render, WHITE)
     assert row.passed is False and "the albedo 0.8 read as an sRGB colour" in row.detail, row
+
+
+# --- The second newcomer's misses ------------------------------------------------------------------------------
+
+def test_buffers_never_cleared_give_every_material_one_image_and_fail_determinism():
+    """pygfx with clear=False: every render repeated the first one drawn, and determinism passed."""
+    first = {}
+
+    def render(model, params, scene, lobe=None):
+        img = box_filtered_lambert(scene, np.asarray(params["albedo"], np.float64))
+        return np.asarray(first.setdefault(scene.resolution, img), np.float32)
+    models = {"grey": ModelSpec(name="grey", parameters=(ParamSpec(name="albedo", kind="rgb", default=(0.3,) * 3),)),
+              "lambert": MODELS["lambert"]}
+    row = check.determinism(render, models, WHITE)
+    assert row.passed is False and "give one image, bit for bit" in row.detail and "clear the frame" in row.fix, row
+
+
+def test_a_units_error_of_a_few_percent_with_no_factor_lets_sampling_say_more():
+    """One sample a pixel in pygfx: units 1.29 % off, 0.98x, and sampling was not judged."""
+    def render(model, params, scene, lobe=None):
+        return np.asarray(analytic_lambert(scene, np.asarray(params["albedo"]) * 0.98), np.float32)
+    rows = {key: row for key, row in zip(check.TITLES, check.run(render, MODELS, WHITE))}
+    assert rows["units"].passed is False and "see sampling" in rows["units"].detail, rows["units"]
+    assert rows["sampling"].passed is False and "one sample a pixel" in rows["sampling"].detail, rows["sampling"]
+
+
+def test_a_specular_term_left_on_at_grazing_angles_is_not_called_one_sample_a_pixel():
+    """A Phong material with its specular at 0 still reflected at grazing angles: sampling said "one sample a
+    pixel" of a renderer taking 64."""
+    from brdfremap.core.testing import sphere_hits
+
+    def render(model, params, scene, lobe=None):
+        img = box_filtered_lambert(scene, np.asarray(params["albedo"], np.float64))
+        hits = sphere_hits(scene)
+        grazing = np.clip(1 - (hits.normal * hits.view).sum(-1), 0, 1) ** 5  # a Fresnel-like rim
+        return np.asarray(img + 0.3 * grazing[..., None] * (img.max(axis=-1, keepdims=True) > 0), np.float32)
+    row = check.sampling(render, WHITE)
+    assert row.passed is False and "one sample a pixel" not in row.detail, row
+    assert "not the pixel filter" in row.detail and "no specular or Fresnel term" in row.fix, row
+
+
+def test_a_light_without_falloff_clipped_at_1_is_not_called_a_display_curve():
+    """Decay 0 with the pixels clipped at 1: encoding said "to the power 0.32: gamma- or sRGB-encoded"."""
+    from brdfremap.core.testing import sphere_hits
+
+    def render(model, params, scene, lobe=None):
+        hits = sphere_hits(scene)
+        d2 = ((np.asarray(scene.point_lights[0].position) - hits.position) ** 2).sum(-1)
+        return np.asarray(np.minimum(box_filtered_lambert(scene, 0.8) * d2[..., None], 1.0), np.float32)
+    rows = {key: row for key, row in zip(check.TITLES, check.run(render, MODELS, WHITE))}
+    assert rows["encoding"].passed is not False, rows["encoding"]
+    assert rows["units"].passed is False and "inverse-square falloff" in rows["units"].detail, rows["units"]
+
+
+def test_the_environment_row_names_a_mirrored_map():
+    from brdfremap.core.data.scene import EnvironmentLight  # noqa: F401 (the studio is the row's own scene)
+
+    def render(model, params, scene, lobe=None):
+        return np.asarray(box_filtered_lambert(scene, 0.8)[:, ::-1], np.float32)
+    row = check.lit_by_environment(render, WHITE, True)
+    assert row.passed is False and "the map is mirrored left-right" in row.detail, row
+    good = check.lit_by_environment(lambda m, p, s, lobe=None: box_filtered_lambert(s, 0.8), WHITE, True)
+    assert good.passed, good
