@@ -68,7 +68,8 @@ ENCODING_FIX = ("write linear radiance: no view transform or display curve (Blen
                 "linear, raw or scene-referred output), no gamma; a read-back of an sRGB target is decoded first")
 GRAZING_FIX = ("the calibration material must be a Lambertian at every angle: no specular or Fresnel term left on "
                "(a Phong or a principled material with its specular at 0 still reflects at grazing angles; use a "
-               "diffuse-only material), and a point light in W/sr falling off as 1/r² wherever it is")
+               "diffuse-only material), a point light in W/sr falling off as 1/r² wherever it is, and a round "
+               "silhouette (a mesh of too few segments draws a polygon)")
 SAMPLING_FIX = ("integrate each pixel over its area: several samples a pixel spread over it with a box filter (a path "
                 "tracer's pixel filter, a rasteriser's supersampling); one sample at each pixel's centre draws the "
                 "silhouette and a rim light's crescent wrong, and a fit reads that as the material")
@@ -170,8 +171,8 @@ def units(img: np.ndarray, want: np.ndarray, inner: np.ndarray, tolerance: float
             said += f"; it has the shape of the analytic image {words} ({shaped:.2%} from it, scaled)"
     small = not said and abs(ratio - 1.0) < SMALL_UNITS
     if small:
-        said = ("; a few percent and no usual factor: more likely how the pixels are sampled (see sampling) or the "
-                "sphere's facets than units")
+        said = ("; its scale is right but not its shape, with no usual cause: more likely how the pixels are sampled "
+                "(see sampling) or the sphere's facets (a coarse or flat-shaded mesh) than units")
     return Row("units", False, f"{where}{errors[best]:.2%} off the analytic radiance; the image is {ratio:.4g}x it"
                f"{said}", UNITS_FIX, blocks=not small)
 
@@ -181,8 +182,9 @@ def orientation(img: np.ndarray, want: np.ndarray, inner: np.ndarray, where: str
     is nearest to, each scaled to the image's total."""
     errors = placements(want, img, inner, same_total=True)
     best = min(errors, key=errors.get)
-    if best == "as expected":
-        return Row("orientation", True, f"{where}{errors[best]:.2%} from the expected image (scaled to its total)")
+    if best == "as expected" or errors[best] > errors["as expected"] / 2:  # a placement is named where it is clear
+        return Row("orientation", True, f"{where}{errors['as expected']:.2%} from the expected image (scaled to its "
+                   "total)")
     return Row("orientation", False, f"{where}the image is {best} ({errors[best]:.2%} from that, "
                f"{errors['as expected']:.2%} from the expected one)", SHIFT_FIX if best in SHIFTS else FLIP_FIX)
 

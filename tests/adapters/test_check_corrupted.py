@@ -213,7 +213,8 @@ def test_a_light_without_falloff_clipped_at_1_is_not_called_a_display_curve():
     def render(model, params, scene, lobe=None):
         hits = sphere_hits(scene)
         d2 = ((np.asarray(scene.point_lights[0].position) - hits.position) ** 2).sum(-1)
-        return np.asarray(np.minimum(box_filtered_lambert(scene, 0.8) * d2[..., None], 1.0), np.float32)
+        return np.asarray(np.minimum(box_filtered_lambert(scene, np.asarray(params["albedo"])) * d2[..., None], 1.0),
+                          np.float32)
     rows = {key: row for key, row in zip(check.TITLES, check.run(render, MODELS, WHITE))}
     assert rows["encoding"].passed is not False, rows["encoding"]
     assert rows["units"].passed is False and "inverse-square falloff" in rows["units"].detail, rows["units"]
