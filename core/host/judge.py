@@ -139,6 +139,25 @@ def encoding(img: np.ndarray, want: np.ndarray, inner: np.ndarray, where: str = 
                ENCODING_FIX)
 
 
+def _sampled_off_centre(img: np.ndarray, scene: ProbeScene) -> tuple[tuple[float, float], float] | None:
+    """((x, y) within the pixel, error) of the one ray a pixel, at quarter-pixel steps other than the centre, whose
+    analytic image the image is within `SAMPLING_TOLERANCE` of (a rasteriser's sample position without its
+    anti-aliasing), else None."""
+    from .analytic import _directions, _surface, lambert_radiance
+
+    idx = np.arange(scene.resolution, dtype=np.float64)
+    found = {}
+    for ox in (0.0, 0.25, 0.75, 1.0):
+        for oy in (0.0, 0.25, 0.5, 0.75, 1.0):
+            xx, yy = np.meshgrid(idx + ox, idx + oy)
+            found[(ox, oy)] = relative_rmse(lambert_radiance(scene, _surface(scene, *_directions(scene, xx, yy))), img)
+    for oy in (0.0, 0.25, 0.75, 1.0):
+        xx, yy = np.meshgrid(idx + 0.5, idx + oy)
+        found[(0.5, oy)] = relative_rmse(lambert_radiance(scene, _surface(scene, *_directions(scene, xx, yy))), img)
+    best = min(found, key=found.get)
+    return (best, found[best]) if found[best] < SAMPLING_TOLERANCE else None
+
+
 def _power(img: np.ndarray, want: np.ndarray, inner: np.ndarray) -> float | None:
     """The slope of log pixel against log radiance over the lit interior, the expected image placed as the image
     lies; None where too few pixels or levels fit a curve."""
@@ -263,9 +282,13 @@ def sampling(images: dict[str, tuple[np.ndarray, float]], scenes: dict[str, Prob
     if far <= SAMPLING_TOLERANCE:
         return Row("sampling", True, f"{said} from the box-filtered analytic image (at most {far:.2%} beyond the "
                    "noise)")
+    off = _sampled_off_centre(images[worst][0], scenes[worst]) if point >= min(err / 2, SAMPLING_TOLERANCE) else None
     if point < min(err / 2, SAMPLING_TOLERANCE):
         why, fix = f"; {point:.2%} from the analytic image sampled at each pixel's centre: one sample a pixel", \
             SAMPLING_FIX
+    elif off is not None:
+        why, fix = (f"; {off[1]:.2%} from the analytic image sampled at ({off[0][0]:g}, {off[0][1]:g}) of each pixel: "
+                    "one sample a pixel, off its centre (0.5, 0.5)"), SAMPLING_FIX
     else:
         why, fix = (f"; {point:.2%} from the analytic image sampled at each pixel's centre too: not the pixel "
                     "filter, the light drawn otherwise at grazing angles"), GRAZING_FIX
