@@ -68,8 +68,9 @@ ENCODING_FIX = ("write linear radiance: no view transform or display curve (Blen
                 "linear, raw or scene-referred output), no gamma; a read-back of an sRGB target is decoded first")
 GRAZING_FIX = ("the calibration material must be a Lambertian at every angle: no specular or Fresnel term left on "
                "(a Phong or a principled material with its specular at 0 still reflects at grazing angles; use a "
-               "diffuse-only material), a point light in W/sr falling off as 1/r² wherever it is, and a round "
-               "silhouette (a mesh of too few segments draws a polygon)")
+               "diffuse-only material); the silhouette round (a mesh of too few segments draws a polygon, and its "
+               "interpolated normals a crescent of their own); each pixel integrated over its area (several "
+               "samples a pixel, a box filter)")
 SAMPLING_FIX = ("integrate each pixel over its area: several samples a pixel spread over it with a box filter (a path "
                 "tracer's pixel filter, a rasteriser's supersampling); one sample at each pixel's centre draws the "
                 "silhouette and a rim light's crescent wrong, and a fit reads that as the material")
@@ -290,7 +291,8 @@ def sampling(images: dict[str, tuple[np.ndarray, float]], scenes: dict[str, Prob
         why, fix = (f"; {off[1]:.2%} from the analytic image sampled at ({off[0][0]:g}, {off[0][1]:g}) of each pixel: "
                     "one sample a pixel, off its centre (0.5, 0.5)"), SAMPLING_FIX
     else:
-        why, fix = (f"; {point:.2%} from the analytic image sampled at each pixel's centre too: not the pixel "
-                    "filter, the light drawn otherwise at grazing angles"), GRAZING_FIX
+        why, fix = (f"; {point:.2%} from the analytic image sampled at each pixel's centre too, and from it sampled "
+                    "anywhere else in the pixel: not the pixel filter alone; the sphere's edge or the material at "
+                    "grazing angles drawn otherwise"), GRAZING_FIX
     return Row("sampling", False, f"{worst}: {err:.2%} from the box-filtered analytic image ({far:.2%} beyond the "
                f"noise){why}", fix)

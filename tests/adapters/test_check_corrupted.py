@@ -203,7 +203,7 @@ def test_a_specular_term_left_on_at_grazing_angles_is_not_called_one_sample_a_pi
         return np.asarray(img + 0.3 * grazing[..., None] * (img.max(axis=-1, keepdims=True) > 0), np.float32)
     row = check.sampling(render, WHITE)
     assert row.passed is False and "one sample a pixel" not in row.detail, row
-    assert "not the pixel filter" in row.detail and "no specular or Fresnel term" in row.fix, row
+    assert "not the pixel filter alone" in row.detail and "no specular or Fresnel term" in row.fix, row
 
 
 def test_a_light_without_falloff_clipped_at_1_is_not_called_a_display_curve():
@@ -229,3 +229,16 @@ def test_the_environment_row_names_a_mirrored_map():
     assert row.passed is False and "the map is mirrored left-right" in row.detail, row
     good = check.lit_by_environment(lambda m, p, s, lobe=None: box_filtered_lambert(s, 0.8), WHITE, True)
     assert good.passed, good
+
+
+def test_one_sample_a_pixel_off_its_centre_is_named_with_where_it_falls():
+    """A rasteriser without its anti-aliasing may take each pixel's one sample off its centre."""
+    from brdfremap.core.host.analytic import _directions, _surface, lambert_radiance
+
+    def render(model, params, scene, lobe=None):
+        idx = np.arange(scene.resolution, dtype=np.float64)
+        xx, yy = np.meshgrid(idx + 0.75, idx + 0.75)
+        return np.asarray(lambert_radiance(scene, _surface(scene, *_directions(scene, xx, yy)), 0.8), np.float32)
+    row = check.sampling(render, WHITE)
+    assert row.passed is False and "sampled at (0.75, 0.75) of each pixel: one sample a pixel, off its centre" \
+        in row.detail, row
