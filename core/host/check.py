@@ -287,8 +287,21 @@ GLOSSY_TOLERANCE = 0.10
 Cycles 0.5 %, three.js 3.0 %, MaterialX 2.6 %; the environment mirrored in the reflection 134 %, turned 10° 73 %,
 1/π of it 68 %."""
 MIRROR_FIX = ("a perfect mirror reflects the environment along d - 2(d.n)n, the map oriented as the diffuse sphere "
-              "sees it (see units and orientation), at its full radiance: no prefiltering blur, no extra factor; "
-              "check how the renderer's specular rays look up the environment")
+              "sees it (see environment), at its full radiance: the float map's pixels as given (no sRGB decoding of "
+              "them, no exposure), no prefiltering blur at roughness 0, no extra factor")
+
+
+def _named(img: np.ndarray, want: np.ndarray, err: float, flipped: str) -> str:
+    """What an image far from its analytic one under the studio shows: black, ``flipped`` one way (the
+    environment turned in its lookups), and its scale with the usual factor it is nearest."""
+    if not img.any():
+        return "; the image is black (the material lit by no environment light)"
+    flips = {k: relative_rmse(f(want), img) for k, f in judge.FLIPS.items()}
+    flip = min(flips, key=flips.get)
+    ratio = float(img.sum() / max(float(want.sum()), 1e-30))
+    known = judge.usual_factor(ratio)
+    return (f"; {flipped} {flip} ({flips[flip]:.2%} from that)" if flips[flip] < err / 2 else "") + \
+        f"; the image is {ratio:.4g}x it" + (f" (a factor of {known})" if known else "")
 
 
 def glossy(render: Callable, mirror: tuple[str, dict] | None, environment: bool) -> Row:
@@ -308,12 +321,7 @@ def glossy(render: Callable, mirror: tuple[str, dict] | None, environment: bool)
     far = beyond_noise(err, noise)
     if far <= GLOSSY_TOLERANCE:
         return Row(name, True, f"{err:.2%} from the analytic mirror ({far:.2%} beyond the noise)")
-    flips = {k: relative_rmse(f(want), img) for k, f in judge.FLIPS.items()}
-    flip = min(flips, key=flips.get)
-    ratio = float(img.sum() / max(float(want.sum()), 1e-30))
-    known = judge.usual_factor(ratio)
-    why = (f"; the reflection is {flip} ({flips[flip]:.2%} from that)" if flips[flip] < err / 2 else "") + (
-        f"; the image is {ratio:.4g}x it" + (f" (a factor of {known})" if known else ""))
+    why = _named(img, want, err, "the reflection is")
     return Row(name, False, f"{err:.2%} from the analytic mirror ({far:.2%} beyond the noise){why}", MIRROR_FIX)
 
 
@@ -343,12 +351,7 @@ def lit_by_environment(render: Callable, white: tuple[str, dict] | None, environ
     far = beyond_noise(err, noise)
     if far <= ENVIRONMENT_TOLERANCE:
         return Row(name, True, f"{err:.2%} from the analytic image ({far:.2%} beyond the noise)")
-    flips = {k: relative_rmse(f(want), img) for k, f in judge.FLIPS.items()}
-    flip = min(flips, key=flips.get)
-    ratio = float(img.sum() / max(float(want.sum()), 1e-30))
-    known = judge.usual_factor(ratio)
-    why = (f"; the map is {flip} ({flips[flip]:.2%} from that)" if flips[flip] < err / 2 else "") + (
-        f"; the image is {ratio:.4g}x it" + (f" (a factor of {known})" if known else ""))
+    why = _named(img, want, err, "the map is")
     return Row(name, False, f"{err:.2%} from the analytic image ({far:.2%} beyond the noise){why}", ENVIRONMENT_FIX)
 
 
@@ -389,8 +392,8 @@ HANG_FIX = ("the renderer likely does not honour the sample count it is given (a
 
 NEEDS = {"quantisation": ("determinism",), "encoding": ("determinism",), "lobes": ("determinism",),
          "transmission": ("determinism",), "units": ("quantisation", "encoding"), "orientation": ("units",),
-         "precision": ("units",), "sampling": ("units", "orientation"), "environment": ("units", "orientation"),
-         "glossy": ("units", "orientation", "precision")}
+         "precision": ("units",), "sampling": ("units", "orientation"), "environment": ("sampling",),
+         "glossy": ("sampling", "precision")}
 """A row judged only where the row it names passed (else its failure would be that row's cause read again:
 a display curve read as a units factor and a shift, a units factor as aliasing)."""
 

@@ -77,7 +77,9 @@ SAMPLING_FIX = ("integrate each pixel over its area: several samples a pixel spr
 
 
 def usual_factor(ratio: float) -> str:
-    """The usual factor a ratio is nearest to (within 3 %), or ""."""
+    """The usual factor a ratio is nearest to (within 3 %), or "" (a black image's 0 included)."""
+    if not ratio > 0 or not math.isfinite(ratio):
+        return ""
     name, value = min(FACTORS.items(), key=lambda kv: abs(math.log(ratio / kv[1])))
     return name if abs(math.log(ratio / value)) < 0.03 else ""
 
@@ -192,7 +194,8 @@ def units(img: np.ndarray, want: np.ndarray, inner: np.ndarray, tolerance: float
     small = not said and abs(ratio - 1.0) < SMALL_UNITS
     if small:
         said = ("; its scale is right but not its shape, with no usual cause: more likely how the pixels are sampled "
-                "(see sampling) or the sphere's facets (a coarse or flat-shaded mesh) than units")
+                "(see sampling), the sphere's facets (a coarse or flat-shaded mesh) or a specular term left on the "
+                "calibration material than units")
     return Row("units", False, f"{where}{errors[best]:.2%} off the analytic radiance; the image is {ratio:.4g}x it"
                f"{said}", UNITS_FIX, blocks=not small)
 

@@ -242,3 +242,21 @@ def test_one_sample_a_pixel_off_its_centre_is_named_with_where_it_falls():
     row = check.sampling(render, WHITE)
     assert row.passed is False and "sampled at (0.75, 0.75) of each pixel: one sample a pixel, off its centre" \
         in row.detail, row
+
+
+def test_a_black_mirror_is_said_black_not_a_traceback():
+    """The third newcomer's Phong mirror under the studio drew nothing: `math domain error` in the factor."""
+    row = check.glossy(lambda m, p, s, lobe=None: np.zeros((s.resolution, s.resolution, 3), np.float32),
+                       ("mirror", {}), environment=True)
+    assert row.passed is False and "the image is black" in row.detail, row
+    assert judge.usual_factor(0.0) == ""
+
+
+def test_the_studio_rows_wait_for_sampling():
+    """One sample a pixel: the environment and glossy rows blamed the map and the specular lookups."""
+    def render(model, params, scene, lobe=None):
+        return np.asarray(analytic_lambert(scene, np.asarray(params["albedo"])), np.float32)
+    rows = {key: row for key, row in zip(check.TITLES, check.run(render, MODELS, WHITE, environment=True,
+                                                                   mirror=("lambert", {"albedo": (0.8,) * 3})))}
+    assert rows["sampling"].passed is False
+    assert rows["environment"].passed is None and rows["glossy"].passed is None, rows
