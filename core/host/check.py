@@ -144,7 +144,9 @@ def determinism(render: Callable, models: dict, white: tuple[str, dict] | None =
         first = render(model, p, SCENE)
         if not np.array_equal(first, render(model, p, SCENE)):
             return Row(name, False, f"model {model}: two renders with seed {SCENE.seed} differ",
-                       "pass the scene's seed to the renderer's sampler", blocks=False)  # noise: the rest still judge
+                       "pass the scene's seed to the renderer's sampler; a renderer without one changes frame to frame "
+                       "in its post-processing (dithering, temporal anti-aliasing, auto exposure): turn it off",
+                       blocks=False)  # noise: the rest still judge
         if white is not None and (white[0], white[1]) != (model, p):
             if np.array_equal(first, render(white[0], white[1], SCENE)):
                 return Row(name, False, f"model {model} at its defaults and the calibration material give one image, "
@@ -201,7 +203,11 @@ def images(render: Callable, models: dict, environment: bool = True) -> Row:
             return Row(name, False, f"model {model}: {int((~np.isfinite(img)).any(axis=-1).sum())} pixels are not "
                        "finite (NaN or infinity)", "a pixel filter or a division that can reach 0 (a normalised "
                        "filter's weights, pow of a negative, 0/0 at the sphere's edge): clamp, or filter with a box")
-        if img.shape != (n, n, 3) or not np.isfinite(img).all() or img.max() <= 0:
+        if img.shape == (n, n, 3) and img.max() <= 0:
+            return Row(name, False, f"model {model}: every pixel is 0 (nothing lit)", "the sphere in the camera's "
+                       "view, lit by the scene's light at its intensity in W/sr; an exposure so low that an 8-bit "
+                       "read-back rounds the image to 0 (a fixed camera exposure: scale the light by its inverse)")
+        if img.shape != (n, n, 3) or not np.isfinite(img).all():
             top = float(np.nanmax(img)) if img.size and not np.isnan(img).all() else float("nan")
             return Row(name, False, f"model {model}: shape {img.shape}, max {top:.3g}",
                        f"write {n}x{n} RGB float pixels of the lit sphere")
@@ -225,8 +231,9 @@ def lobes(render: Callable, models: dict) -> Row:
         if err >= tolerance:
             return Row(name, False, f"model {model}: the lobes' sum is {err:.2e} from the full image (allowed "
                        f"{tolerance:.0e}{' for half floats' if tolerance > LOBE_TOLERANCE else ''})",
-                       "each lobe's overrides must switch the other lobe off and nothing else; if precision fails "
-                       "too, fix that first (rounding breaks the sum)")
+                       "each lobe's overrides must switch the other lobe off and nothing else; or the output rounds "
+                       "(8-bit reads, merged or not, half floats: three images rounded apart miss their sum by about "
+                       "a level; see precision and quantisation)")
     return Row(name, True, f"{checked} model(s) with two lobes" if checked else "no model with two lobes")
 
 

@@ -219,17 +219,18 @@ def quantised(img: np.ndarray, want: np.ndarray | None = None) -> str:
     most 256 whole multiples of one step (an 8-bit image scaled after)."""
     img = np.asarray(img, np.float64)
     lit = img.max(axis=-1) > 0
-    values = np.unique(img[lit])
+    values = np.unique(img[lit & (img.min(axis=-1) > 0)])  # a channel at 0 is no level of a step
     step = _one_step(values) if np.count_nonzero(img > 0) >= 1024 else None  # lit values, every channel
     kind = eight_bit(img)
     named = {"linear": "levels k/255, as an 8-bit image reads", "sRGB": "sRGB-decoded 8-bit levels"}
     how = named.get(kind, "") or (f"{values.size} levels {step:.4g} apart, scaled after" if step else "")
-    if want is not None:
-        lit = lit & (np.asarray(want).max(axis=-1) > 0)
-        expected = np.unique(np.asarray(want, np.float32)[lit]).size
-        if expected >= GRADIENT_LEVELS and np.unique(img[lit]).size <= QUANTISED_LEVELS:
-            return (f"its lit pixels take {np.unique(img[lit]).size} values where the analytic gradient has "
-                    f"{expected}: 8-bit" + (f" ({how})" if how else ", converted after"))
+    if want is not None:  # over the pixels the analytic image lights: an image rounding most of them to 0 included
+        lit = np.asarray(want).max(axis=-1) > 0
+        shown = img[lit]
+        expected, got = np.unique(np.asarray(want, np.float32)[lit]).size, np.unique(shown[shown > 0]).size
+        if expected >= GRADIENT_LEVELS and got <= QUANTISED_LEVELS:
+            return (f"its lit pixels take {got} values where the analytic gradient has {expected}: 8-bit"
+                    + (f" ({how})" if how else ", converted after"))
     return f"every lit pixel one of {how} (8-bit)" if how else ""
 
 

@@ -260,3 +260,14 @@ def test_the_studio_rows_wait_for_sampling():
                                                                    mirror=("lambert", {"albedo": (0.8,) * 3})))}
     assert rows["sampling"].passed is False
     assert rows["environment"].passed is None and rows["glossy"].passed is None, rows
+
+
+def test_an_underexposed_8_bit_read_back_is_quantised_not_passed():
+    """open3d's fixed exposure: the probe in 2 values over 581 lit pixels passed quantisation (and a channel at 0
+    made its step 0)."""
+    def render(model, params, scene, lobe=None):
+        return np.asarray(_eight_bit(box_filtered_lambert(scene, np.asarray(params["albedo"])), 1 / 200), np.float32)
+    row = check.quantisation(render, WHITE)
+    assert row.passed is False and "8-bit" in row.detail, row
+    dark = check.images(lambda m, p, s, lobe=None: np.zeros((s.resolution,) * 2 + (3,), np.float32), MODELS, False)
+    assert dark.passed is False and "every pixel is 0" in dark.detail and "8-bit read-back" in dark.fix, dark
