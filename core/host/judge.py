@@ -218,8 +218,7 @@ def quantised(img: np.ndarray, want: np.ndarray | None = None) -> str:
     (any curve or scale: levels of a known gradient), or (no ``want``) 256 levels of 8-bit linear or sRGB, or at
     most 256 whole multiples of one step (an 8-bit image scaled after)."""
     img = np.asarray(img, np.float64)
-    lit = img.max(axis=-1) > 0
-    values = np.unique(img[lit & (img.min(axis=-1) > 0)])  # a channel at 0 is no level of a step
+    values = np.unique(img[img > 0])  # a channel at 0 is no level of a step
     step = _one_step(values) if np.count_nonzero(img > 0) >= 1024 else None  # lit values, every channel
     kind = eight_bit(img)
     named = {"linear": "levels k/255, as an 8-bit image reads", "sRGB": "sRGB-decoded 8-bit levels"}
