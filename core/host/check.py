@@ -405,6 +405,10 @@ NEEDS = {"quantisation": ("determinism",), "encoding": ("determinism",), "lobes"
 a display curve read as a units factor and a shift, a units factor as aliasing)."""
 
 
+STUDIO_ROWS = frozenset({"environment", "glossy"})
+"""Rows that judge only where the adapter renders an environment (else they pass, having nothing to judge)."""
+
+
 def _remembered(render: Callable) -> Callable:
     """``render`` with the white Lambertian's probe rendered once for the rows that judge it (encoding,
     units, precision); every other render as it comes (determinism and seed render twice on purpose)."""
@@ -441,7 +445,8 @@ def run(render: Callable, models: dict, white: tuple[str, dict] | None, glass: t
     blocked: set[str] = set()  # rows not judged for a prerequisite's failure (`NEEDS`), and so theirs
     for key in TITLES:
         check = checks[key]
-        failed = [n for n in NEEDS.get(key, ()) if (rows[n].passed is False and rows[n].blocks) or n in blocked]
+        needs = NEEDS.get(key, ()) if environment or key not in STUDIO_ROWS else ()  # else nothing to wait for
+        failed = [n for n in needs if (rows[n].passed is False and rows[n].blocks) or n in blocked]
         if stopped is not None:
             rows[key] = Row(TITLES[key], None, f"not run: {stopped}")
             continue
