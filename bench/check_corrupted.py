@@ -10,24 +10,17 @@ wall time."""
 
 from __future__ import annotations
 
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
-from brdfremap.core.data.schemas import ModelSpec, ParamSpec
-from brdfremap.core.host import check
-from brdfremap.core.testing import analytic_lambert, box_filtered_lambert, sphere_hits
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the tests' corrupted renderers, not a copy of them
 
-MODELS = {"lambert": ModelSpec(name="lambert", parameters=(ParamSpec(name="albedo", kind="rgb", default=(0.5,) * 3),))}
-WHITE = ("lambert", {"albedo": (0.8, 0.8, 0.8)})
-
-
-def _srgb(x):
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(np.maximum(x, 0.0031308), 1 / 2.4) - 0.055)
-
-
-def _eight_bit(x, exposure=1.0):
-    return np.round(np.clip(x * exposure, 0, 1) * 255) / 255 / exposure
+from brdfremap.core.host import check  # noqa: E402
+from brdfremap.core.testing import box_filtered_lambert, sphere_hits  # noqa: E402
+from tests.adapters.test_check_corrupted import CORRUPT as ISSUE, MODELS, WHITE  # noqa: E402
 
 
 def _no_falloff(scene, a):
@@ -36,16 +29,10 @@ def _no_falloff(scene, a):
     return box_filtered_lambert(scene, a) * d2[..., None]
 
 
-CORRUPT = {
-    "correct": lambda scene, a: box_filtered_lambert(scene, a),
-    "clipped at 4": lambda scene, a: np.minimum(box_filtered_lambert(scene, a), 4.0),
-    "8-bit at 1/64": lambda scene, a: _eight_bit(box_filtered_lambert(scene, a), 1 / 64),
-    "8-bit sRGB, not linearised": lambda scene, a: _eight_bit(_srgb(box_filtered_lambert(scene, a))),
-    "one ray at each pixel's centre": lambda scene, a: analytic_lambert(scene, a),
-    "a light without 1/r² falloff": _no_falloff,
-    "x pi": lambda scene, a: box_filtered_lambert(scene, a) * np.pi,
-    "mirrored left-right": lambda scene, a: box_filtered_lambert(scene, a)[:, ::-1],
-}
+CORRUPT = {**ISSUE, "a light without 1/r² falloff": _no_falloff,
+           "x pi": lambda scene, a: box_filtered_lambert(scene, a) * np.pi,
+           "mirrored left-right": lambda scene, a: box_filtered_lambert(scene, a)[:, ::-1]}
+"""The issue's four (and the correct renderer) as the tests write them, and three usual mistakes more."""
 
 
 def main() -> int:

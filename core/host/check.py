@@ -321,15 +321,8 @@ def glossy(render: Callable, mirror: tuple[str, dict] | None, environment: bool)
     if mirror is None:
         return Row(name, None, "no mirror declared", "declare a perfect mirror (`Adapter.mirror`: reflectance 1 at "
                    "every angle, roughness 0; a conductor of IOR 0 + 10i, or a white metal)")
-    a, b = (np.asarray(render(mirror[0], mirror[1], STUDIO.with_(seed=s)), np.float64) for s in (0, 1))
-    img, noise = (a + b) / 2, relative_rmse(a, b) / 2
-    want = analytic_mirror(STUDIO, supersample=8).astype(np.float64)
-    err = relative_rmse(want, img)
-    far = beyond_noise(err, noise)
-    if far <= GLOSSY_TOLERANCE:
-        return Row(name, True, f"{err:.2%} from the analytic mirror ({far:.2%} beyond the noise)")
-    why = _named(img, want, err, "the reflection is")
-    return Row(name, False, f"{err:.2%} from the analytic mirror ({far:.2%} beyond the noise){why}", MIRROR_FIX)
+    return _under_studio(name, render, mirror, analytic_mirror(STUDIO, supersample=8), "the analytic mirror",
+                         GLOSSY_TOLERANCE, "the reflection is", MIRROR_FIX)
 
 
 ENVIRONMENT_TOLERANCE = 0.05
@@ -351,15 +344,23 @@ def lit_by_environment(render: Callable, white: tuple[str, dict] | None, environ
         return Row(name, True, "no environment light: nothing to judge")
     if white is None:
         return Row(name, None, "no calibration material", NO_WHITE)
-    a, b = (np.asarray(render(white[0], white[1], STUDIO.with_(seed=s)), np.float64) for s in (0, 1))
+    return _under_studio(name, render, white, box_filtered_lambert(STUDIO, ALBEDO), "the analytic image",
+                         ENVIRONMENT_TOLERANCE, "the map is", ENVIRONMENT_FIX)
+
+
+def _under_studio(name: str, render: Callable, material: tuple[str, dict], want: np.ndarray, what: str,
+                  tolerance: float, flipped: str, fix: str) -> Row:
+    """A material under the studio (`STUDIO`, two seeds) against ``want``, its analytic image (``what``), within
+    ``tolerance`` beyond the noise; off, what the image shows (`_named`) and ``fix``."""
+    a, b = (np.asarray(render(material[0], material[1], STUDIO.with_(seed=s)), np.float64) for s in (0, 1))
     img, noise = (a + b) / 2, relative_rmse(a, b) / 2
-    want = box_filtered_lambert(STUDIO, ALBEDO).astype(np.float64)
+    want = np.asarray(want, np.float64)
     err = relative_rmse(want, img)
     far = beyond_noise(err, noise)
-    if far <= ENVIRONMENT_TOLERANCE:
-        return Row(name, True, f"{err:.2%} from the analytic image ({far:.2%} beyond the noise)")
-    why = _named(img, want, err, "the map is")
-    return Row(name, False, f"{err:.2%} from the analytic image ({far:.2%} beyond the noise){why}", ENVIRONMENT_FIX)
+    said = f"{err:.2%} from {what} ({far:.2%} beyond the noise)"
+    if far <= tolerance:
+        return Row(name, True, said)
+    return Row(name, False, said + _named(img, want, err, flipped), fix)
 
 
 GLASS = ProbeScene(lights=[EnvironmentLight(type="environment", map="studio")], resolution=48, spp=256)
